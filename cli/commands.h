@@ -1,0 +1,20 @@
+#pragma once
+// The platemeter binary: thin subcommands over library calls. Each command
+// lives in its own cmd_<name>.cpp and is registered in main.cpp.
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <vector>
+
+namespace platemeter::cli {
+
+// Options every subcommand sees.
+struct GlobalOptions {
+  std::vector<std::string> definition_files;  // extra TOML definition files (--definitions)
+  double cache_memory_mb = 256.0;             // MB; the shared image cache (--cache-mb)
+};
+
+void RegisterInfoCommand(CLI::App& app, GlobalOptions& global);
+void RegisterGridsCommand(CLI::App& app, GlobalOptions& global);
+
+}  // namespace platemeter::cli

@@ -1,0 +1,15 @@
+# platemeter_library(NAME PUBLIC deps... PRIVATE deps...)
+# One library per folder: sources in src/, public headers in include/platemeter/<name>/.
+# Sources are globbed so that adding a file needs no edit here.
+function(platemeter_library name)
+  cmake_parse_arguments(ARG "" "" "PUBLIC;PRIVATE" ${ARGN})
+  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/*.cpp)
+  if(NOT sources)
+    message(STATUS "platemeter: ${name}/ has no sources yet; library skipped")
+    return()
+  endif()
+  add_library(platemeter_${name} STATIC ${sources})
+  add_library(platemeter::${name} ALIAS platemeter_${name})
+  target_include_directories(platemeter_${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  target_link_libraries(platemeter_${name} PUBLIC ${ARG_PUBLIC} PRIVATE ${ARG_PRIVATE})
+endfunction()

@@ -1,0 +1,235 @@
+#include "platemeter/core/image.h"
+
+#include <OpenImageIO/imagecache.h>
+
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+#include <set>
+
+#include "platemeter/core/error.h"
+#include "platemeter/core/log.h"
+
+namespace platemeter {
+namespace {
+
+namespace oiio = OIIO;
+
+oiio::ImageCache* Cache() {
+  // Created once with the default options; ConfigureImageCache may change them.
+  static oiio::ImageCache* cache = [] {
+    oiio::ImageCache* created = oiio::ImageCache::create(/*shared=*/true);
+    ImageCacheOptions defaults;
+    created->attribute("max_memory_MB", static_cast<float>(defaults.max_memory_mb));
+    created->attribute("autotile", defaults.autotile_px);
+    created->attribute("autoscanline", 0);
+    created->attribute("max_open_files", defaults.max_open_files);
+    // Keep tiles in the file's own type: a 16-bit scan costs 2 bytes a pixel in the cache.
+    created->attribute("forcefloat", 0);
+    return created;
+  }();
+  return cache;
+}
+
+std::string CacheError() {
+  std::string message = OneLine(Cache()->geterror());
+  return message.empty() ? "unknown OpenImageIO error" : message;
+}
+
+void WarnOnce(const std::string& path, const std::string& message) {
+  static std::mutex mutex;
+  static std::set<std::string> warned;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (warned.insert(path + "\n" + message).second) Warn(path + ": " + message);
+}
+
+std::optional<double> ResolutionToUm(const oiio::ImageSpec& spec, const char* tag) {
+  const float resolution = spec.get_float_attribute(tag, 0.0f);
+  const std::string unit = spec.get_string_attribute("ResolutionUnit", "");
+  if (!(resolution > 0.0f)) return std::nullopt;
+  if (unit == "in" || unit == "inch") return 25400.0 / resolution;
+  if (unit == "cm") return 10000.0 / resolution;
+  return std::nullopt;  // "none" or unknown: the tags carry no physical size
+}
+
+}  // namespace
+
+bool ImageCacheOptions::Check(std::string* why) const {
+  if (!(max_memory_mb >= 16.0)) {
+    *why = "image cache memory must be at least 16 MB";
+    return false;
+  }
+  if (autotile_px < 64 || (autotile_px & (autotile_px - 1)) != 0) {
+    *why = "autotile size must be a power of two of at least 64 px";
+    return false;
+  }
+  if (max_open_files < 1) {
+    *why = "max_open_files must be positive";
+    return false;
+  }
+  return true;
+}
+
+void ConfigureImageCache(const ImageCacheOptions& options) {
+  std::string why;
+  if (!options.Check(&why)) throw Error("image cache options", why);
+  Cache()->attribute("max_memory_MB", static_cast<float>(options.max_memory_mb));
+  Cache()->attribute("autotile", options.autotile_px);
+  Cache()->attribute("max_open_files", options.max_open_files);
+}
+
+double ImageCacheMemoryUsedMb() {
+  long long bytes = 0;
+  Cache()->getattribute("stat:cache_memory_used", oiio::TypeDesc::INT64, &bytes);
+  return static_cast<double>(bytes) / (1024.0 * 1024.0);
+}
+
+const char* SampleTypeName(SampleType type) {
+  switch (type) {
+    case SampleType::kUint8: return "uint8";
+    case SampleType::kUint16: return "uint16";
+    case SampleType::kFloat32: return "float32";
+  }
+  return "?";
+}
+
+Image Image::Open(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw Error(path, "no such file");
+  if (std::filesystem::is_directory(path, ec)) throw Error(path, "is a directory, not an image");
+
+  const oiio::ustring name(path);
+  // A file rewritten since it was last cached (e.g. by a rerun) must be read anew.
+  Cache()->invalidate(name, /*force=*/false);
+  oiio::ImageSpec spec;
+  if (!Cache()->get_imagespec(name, spec, 0, 0, /*native=*/true)) {
+    throw Error(path, "cannot read as an image (" + CacheError() + ")");
+  }
+
+  Image image;
+  ImageInfo& info = image.info_;
+  info.path = path;
+  info.format_name = spec.get_string_attribute("oiio:FileFormat",
+                                               spec.get_string_attribute("fitsinput:format", ""));
+  if (info.format_name.empty()) {
+    // The cache does not always record the format; ask the reader's extension map.
+    info.format_name = std::filesystem::path(path).extension().string();
+  }
+  info.width_px = spec.width;
+  info.height_px = spec.height;
+  info.channels = spec.nchannels;
+  info.tiled = spec.tile_width > 0;
+  info.tile_width_px = spec.tile_width;
+  info.tile_height_px = spec.tile_height;
+  info.compression = spec.get_string_attribute("compression", "none");
+  if (spec.depth > 1) throw Error(path, "volume images are not scans");
+  if (info.width_px <= 0 || info.height_px <= 0) throw Error(path, "image has no pixels");
+
+  const oiio::TypeDesc format = spec.format;
+  if (format == oiio::TypeDesc::UINT8) {
+    info.sample_type = SampleType::kUint8;
+    info.full_scale_dn = 255.0;
+  } else if (format == oiio::TypeDesc::UINT16) {
+    info.sample_type = SampleType::kUint16;
+    info.full_scale_dn = 65535.0;
+  } else if (format == oiio::TypeDesc::FLOAT || format == oiio::TypeDesc::HALF ||
+             format == oiio::TypeDesc::DOUBLE) {
+    info.sample_type = SampleType::kFloat32;
+    info.full_scale_dn = 1.0;
+  } else {
+    throw Error(path, std::string("unsupported sample type ") + format.c_str() +
+                          " (scans must be 8-bit, 16-bit or float)");
+  }
+  const int bits = spec.get_int_attribute("oiio:BitsPerSample", 0);
+  if (info.sample_type == SampleType::kUint8 && bits != 0 && bits < 8) {
+    throw Error(path, "unsupported bit depth " + std::to_string(bits) + " (scans must be 8-bit, 16-bit or float)");
+  }
+  if (info.sample_type == SampleType::kUint16 && bits != 0 && bits < 16) {
+    WarnOnce(path, std::to_string(bits) + "-bit samples read as 16-bit");
+  }
+  if (info.channels != 1 && info.channels != 2 && info.channels != 3 && info.channels != 4) {
+    throw Error(path, "unsupported channel count " + std::to_string(info.channels));
+  }
+  info.pixel_size_x_um = ResolutionToUm(spec, "XResolution");
+  info.pixel_size_y_um = ResolutionToUm(spec, "YResolution");
+
+  // Probe the last pixel: it lies in the last tile or strip, which a truncated
+  // file does not have.
+  float probe[4];
+  if (!Cache()->get_pixels(name, 0, 0, spec.x + spec.width - 1, spec.x + spec.width, spec.y + spec.height - 1,
+                           spec.y + spec.height, 0, 1, 0, std::min(info.channels, 4),
+                           oiio::TypeDesc::FLOAT, probe)) {
+    throw Error(path, "cannot read pixel data, the file may be truncated (" + CacheError() + ")");
+  }
+  if (info.channels >= 3) WarnOnce(path, "colour image converted to luminance (Rec. 709 weights)");
+  return image;
+}
+
+PixelRect Image::Clip(const PixelRect& rect) const {
+  const long x0 = std::max(rect.x0_px, 0L);
+  const long y0 = std::max(rect.y0_px, 0L);
+  const long x1 = std::min(rect.x_end_px(), info_.width_px);
+  const long y1 = std::min(rect.y_end_px(), info_.height_px);
+  return {x0, y0, std::max(0L, x1 - x0), std::max(0L, y1 - y0)};
+}
+
+ImageWindow Image::ReadWindow(const PixelRect& rect) const {
+  ImageWindow window;
+  window.rect = rect;
+  window.values_dn.resize(static_cast<size_t>(std::max(0L, rect.width_px)) *
+                          static_cast<size_t>(std::max(0L, rect.height_px)));
+  ReadWindowInto(rect, window.values_dn.data());
+  return window;
+}
+
+void Image::ReadWindowInto(const PixelRect& rect, float* values_dn) const {
+  if (rect.empty() || rect.x0_px < 0 || rect.y0_px < 0 || rect.x_end_px() > info_.width_px ||
+      rect.y_end_px() > info_.height_px) {
+    throw Error(info_.path, "window [" + std::to_string(rect.x0_px) + "," + std::to_string(rect.y0_px) + " " +
+                                std::to_string(rect.width_px) + "x" + std::to_string(rect.height_px) +
+                                "] lies outside the image");
+  }
+  const oiio::ustring name(info_.path);
+  const size_t count = static_cast<size_t>(rect.width_px) * static_cast<size_t>(rect.height_px);
+  // OIIO returns integer samples scaled to [0, 1]; scale back to DN.
+  const float to_dn = static_cast<float>(info_.full_scale_dn);
+  const int x0 = static_cast<int>(rect.x0_px), x1 = static_cast<int>(rect.x_end_px());
+  const int y0 = static_cast<int>(rect.y0_px), y1 = static_cast<int>(rect.y_end_px());
+  if (info_.channels <= 2) {
+    // Gray (+ alpha): the first channel only.
+    if (!Cache()->get_pixels(name, 0, 0, x0, x1, y0, y1, 0, 1, 0, 1, oiio::TypeDesc::FLOAT, values_dn)) {
+      throw Error(info_.path, "cannot read pixels (" + CacheError() + ")");
+    }
+    if (to_dn != 1.0f) {
+      for (size_t i = 0; i < count; ++i) values_dn[i] *= to_dn;
+    }
+    return;
+  }
+  std::vector<float> rgb(count * 3);
+  if (!Cache()->get_pixels(name, 0, 0, x0, x1, y0, y1, 0, 1, 0, 3, oiio::TypeDesc::FLOAT, rgb.data())) {
+    throw Error(info_.path, "cannot read pixels (" + CacheError() + ")");
+  }
+  for (size_t i = 0; i < count; ++i) {
+    values_dn[i] = to_dn * (0.2126f * rgb[3 * i] + 0.7152f * rgb[3 * i + 1] + 0.0722f * rgb[3 * i + 2]);
+  }
+}
+
+double ResolvePixelSizeUm(const ImageInfo& info, std::optional<double> user_pixel_size_um) {
+  if (user_pixel_size_um) {
+    if (!(*user_pixel_size_um > 0.0) || !std::isfinite(*user_pixel_size_um)) {
+      throw Error(info.path, "pixel size must be a positive number of micrometres");
+    }
+    return *user_pixel_size_um;
+  }
+  if (info.pixel_size_x_um && info.pixel_size_y_um) {
+    const double x = *info.pixel_size_x_um, y = *info.pixel_size_y_um;
+    if (std::abs(x - y) > 1e-6 * x) {
+      throw Error(info.path, "resolution tags give non-square pixels (" + std::to_string(x) + " x " +
+                                 std::to_string(y) + " um); give --pixel-size-um");
+    }
+    return x;
+  }
+  throw Error(info.path, "no pixel size in the file's resolution tags; give --pixel-size-um");
+}
+
+}  // namespace platemeter

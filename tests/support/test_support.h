@@ -1,0 +1,32 @@
+#pragma once
+// Shared helpers for the test suites: temporary folders, running the CLI.
+#include <filesystem>
+#include <string>
+
+namespace platemeter::testing {
+
+// A fresh folder under the system temp dir, removed when the object dies.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  const std::filesystem::path& path() const { return path_; }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+
+// Runs the platemeter binary with a shell-quoted argument string.
+CommandResult RunPlatemeter(const std::string& arguments);
+
+// Peak resident set size of this process so far, in MB.
+double PeakRssMb();
+
+}  // namespace platemeter::testing

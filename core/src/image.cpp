@@ -2,13 +2,16 @@
 
 #include <OpenImageIO/imagecache.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <mutex>
 #include <set>
 
 #include "platemeter/core/error.h"
 #include "platemeter/core/log.h"
+#include "tiff_integrity.h"
 
 namespace platemeter {
 namespace {
@@ -97,6 +100,11 @@ Image Image::Open(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw Error(path, "no such file");
   if (std::filesystem::is_directory(path, ec)) throw Error(path, "is a directory, not an image");
+
+  if (internal::LooksLikeTiff(path)) {
+    const std::string problem = internal::TiffIntegrityProblem(path);
+    if (!problem.empty()) throw Error(path, problem);
+  }
 
   const oiio::ustring name(path);
   // A file rewritten since it was last cached (e.g. by a rerun) must be read anew.
@@ -191,26 +199,39 @@ void Image::ReadWindowInto(const PixelRect& rect, float* values_dn) const {
   }
   const oiio::ustring name(info_.path);
   const size_t count = static_cast<size_t>(rect.width_px) * static_cast<size_t>(rect.height_px);
-  // OIIO returns integer samples scaled to [0, 1]; scale back to DN.
-  const float to_dn = static_cast<float>(info_.full_scale_dn);
   const int x0 = static_cast<int>(rect.x0_px), x1 = static_cast<int>(rect.x_end_px());
   const int y0 = static_cast<int>(rect.y0_px), y1 = static_cast<int>(rect.y_end_px());
-  if (info_.channels <= 2) {
-    // Gray (+ alpha): the first channel only.
-    if (!Cache()->get_pixels(name, 0, 0, x0, x1, y0, y1, 0, 1, 0, 1, oiio::TypeDesc::FLOAT, values_dn)) {
+  // Gray (+ alpha): the first channel; colour: the first three.
+  const int channels = info_.channels <= 2 ? 1 : 3;
+  // Integer scans are read in their own type so DN come back exact (a detour
+  // through OIIO's [0, 1] floats would give 99.99999 for 100).
+  std::vector<float> samples;
+  float* target = values_dn;
+  if (channels > 1) {
+    samples.resize(count * static_cast<size_t>(channels));
+    target = samples.data();
+  }
+  auto read = [&](oiio::TypeDesc type, void* buffer) {
+    if (!Cache()->get_pixels(name, 0, 0, x0, x1, y0, y1, 0, 1, 0, channels, type, buffer)) {
       throw Error(info_.path, "cannot read pixels (" + CacheError() + ")");
     }
-    if (to_dn != 1.0f) {
-      for (size_t i = 0; i < count; ++i) values_dn[i] *= to_dn;
+  };
+  const size_t sample_count = count * static_cast<size_t>(channels);
+  if (info_.sample_type == SampleType::kUint8) {
+    std::vector<uint8_t> raw(sample_count);
+    read(oiio::TypeDesc::UINT8, raw.data());
+    std::copy(raw.begin(), raw.end(), target);
+  } else if (info_.sample_type == SampleType::kUint16) {
+    std::vector<uint16_t> raw(sample_count);
+    read(oiio::TypeDesc::UINT16, raw.data());
+    std::copy(raw.begin(), raw.end(), target);
+  } else {
+    read(oiio::TypeDesc::FLOAT, target);
+  }
+  if (channels == 3) {
+    for (size_t i = 0; i < count; ++i) {
+      values_dn[i] = 0.2126f * samples[3 * i] + 0.7152f * samples[3 * i + 1] + 0.0722f * samples[3 * i + 2];
     }
-    return;
-  }
-  std::vector<float> rgb(count * 3);
-  if (!Cache()->get_pixels(name, 0, 0, x0, x1, y0, y1, 0, 1, 0, 3, oiio::TypeDesc::FLOAT, rgb.data())) {
-    throw Error(info_.path, "cannot read pixels (" + CacheError() + ")");
-  }
-  for (size_t i = 0; i < count; ++i) {
-    values_dn[i] = to_dn * (0.2126f * rgb[3 * i] + 0.7152f * rgb[3 * i + 1] + 0.0722f * rgb[3 * i + 2]);
   }
 }
 

@@ -1,0 +1,70 @@
+#pragma once
+// Least-squares matching of a parametric cross model on a scan's own pixels.
+//
+// Model (pixel units): a cross of two bars of widths w_h (the bar along u) and
+// w_v (along v), both of tip-to-tip length L, rotated by theta, blurred by an
+// isotropic Gaussian of sigma s and averaged over each pixel's area, on a
+// planar background:
+//   I(x, y) = b0 + bx (x - xc) + by (y - yc) + g * C(u, v)
+//   C = P(v; w_h) P(u; L) + P(u; w_v) P(v; L) - P(v; w_h) P(u; w_v)
+//   u = cos(theta) dx + sin(theta) dy,  v = -sin(theta) dx + cos(theta) dy,  d = (x, y) - (x0, y0)
+// where P(t; w) is the pixel-averaged blurred 1D bar profile (closed form with
+// the integral of erf). A blurred rectangle is exactly the product of its two
+// profiles, so C is the exact blurred cross. The pixel average is taken over a
+// unit square aligned with the cross rather than with the pixel grid: for the
+// small rotations of a scanner this changes only the symmetric kernel, so the
+// centre stays unbiased (the cross and both kernels are point-symmetric).
+// Parameters: x0, y0, theta, w_h, w_v, L, s, g, b0, bx, by. The gain g is
+// negative for dark crosses.
+#include <string>
+#include <vector>
+
+#include "platemeter/core/image.h"
+#include "platemeter/core/pixel.h"
+
+namespace platemeter {
+
+struct CrossFitOptions {
+  double margin_px = 3.0;          // px; pixels this far beyond the blurred arms are used for the background
+  double min_blur_sigma_px = 0.15; // px; lower bound of the fitted blur (keeps the profile smooth)
+  double outlier_threshold = 4.0;  // pixels with |residual| above this many sigma are dropped in the final fit
+  double min_outlier_contrast = 0.05;  // a pixel is never an outlier if it deviates by less than this share of the contrast
+  double max_outlier_fraction = 0.08;  // more dropped pixels than this: the cross is rejected as a defect
+  int max_iterations = 50;         // per solve
+  bool Check(std::string* why) const;
+};
+
+struct CrossFitStart {
+  PixelPoint centre_px;        // approximate centre (within about a line width)
+  double rotation_rad = 0.0;   // approximate rotation of the arms against the pixel axes (mod 90 deg)
+  double line_width_px = 4.0;  // nominal line width
+  double arm_length_px = 100.0;  // nominal tip-to-tip length
+  double blur_sigma_px = 0.7;  // starting blur
+};
+
+struct CrossFitResult {
+  bool converged = false;
+  PixelPoint centre_px;
+  double sigma_x_px = 0.0;       // formal, scaled by the fit's own residual sigma
+  double sigma_y_px = 0.0;
+  double correlation_xy = 0.0;
+  double rotation_rad = 0.0;
+  double width_h_px = 0.0;
+  double width_v_px = 0.0;
+  double arm_length_px = 0.0;
+  double blur_sigma_px = 0.0;
+  double gain_dn = 0.0;          // cross contrast (negative: dark cross)
+  double background_dn = 0.0;
+  double residual_sigma_dn = 0.0;   // RMS residual of the final fit (its sigma0)
+  double outlier_fraction = 0.0;    // share of pixels dropped as outliers
+  int pixels_used = 0;
+  std::string summary;              // one sentence: what happened
+};
+
+// The window must hold the whole cross plus the margin (see CrossFitWindow).
+CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, const CrossFitOptions& options = {});
+
+// The window FitCross needs around a start position (not clipped to the image).
+PixelRect CrossFitWindow(const CrossFitStart& start, const CrossFitOptions& options = {});
+
+}  // namespace platemeter

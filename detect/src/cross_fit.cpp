@@ -1,0 +1,274 @@
+#include "platemeter/detect/cross_fit.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "bar_profile.h"
+
+namespace platemeter {
+namespace {
+
+using internal::BarProfile;
+using internal::EvaluateBarProfile;
+
+// Parameter order of the cross model (see cross_fit.h).
+enum Param { kX0, kY0, kTheta, kWidthH, kWidthV, kLength, kSigma, kGain, kB0, kBx, kBy, kNumParams };
+
+struct Sample {
+  double x_px;
+  double y_px;
+  double value_dn;
+};
+
+// Model value at one pixel and, if gradient != nullptr, its derivatives.
+double CrossModel(const double* p, double xc, double yc, const Sample& s, double* gradient) {
+  const double c = std::cos(p[kTheta]), sn = std::sin(p[kTheta]);
+  const double dx = s.x_px - p[kX0], dy = s.y_px - p[kY0];
+  const double u = c * dx + sn * dy;
+  const double v = -sn * dx + c * dy;
+  const BarProfile a = EvaluateBarProfile(v, p[kWidthH], p[kSigma]);   // across the bar along u
+  const BarProfile b = EvaluateBarProfile(u, p[kWidthV], p[kSigma]);   // across the bar along v
+  const BarProfile eu = EvaluateBarProfile(u, p[kLength], p[kSigma]);  // along the bar along u
+  const BarProfile ev = EvaluateBarProfile(v, p[kLength], p[kSigma]);  // along the bar along v
+  const double cross = a.value * eu.value + b.value * ev.value - a.value * b.value;
+  const double bx = s.x_px - xc, by = s.y_px - yc;
+  const double model = p[kB0] + p[kBx] * bx + p[kBy] * by + p[kGain] * cross;
+  if (gradient) {
+    const double g = p[kGain];
+    const double dc_du = a.value * eu.d_t + b.d_t * ev.value - a.value * b.d_t;
+    const double dc_dv = a.d_t * eu.value + b.value * ev.d_t - a.d_t * b.value;
+    // du/dx0 = -c, dv/dx0 = sn; du/dy0 = -sn, dv/dy0 = -c; du/dtheta = v, dv/dtheta = -u.
+    gradient[kX0] = g * (-c * dc_du + sn * dc_dv);
+    gradient[kY0] = g * (-sn * dc_du - c * dc_dv);
+    gradient[kTheta] = g * (v * dc_du - u * dc_dv);
+    gradient[kWidthH] = g * (a.d_width * eu.value - a.d_width * b.value);
+    gradient[kWidthV] = g * (b.d_width * ev.value - a.value * b.d_width);
+    gradient[kLength] = g * (a.value * eu.d_width + b.value * ev.d_width);
+    gradient[kSigma] = g * (a.d_sigma * eu.value + a.value * eu.d_sigma + b.d_sigma * ev.value +
+                            b.value * ev.d_sigma - a.d_sigma * b.value - a.value * b.d_sigma);
+    gradient[kGain] = cross;
+    gradient[kB0] = 1.0;
+    gradient[kBx] = bx;
+    gradient[kBy] = by;
+  }
+  return model;
+}
+
+class CrossCost : public ceres::CostFunction {
+ public:
+  CrossCost(const std::vector<Sample>* samples, double xc, double yc) : samples_(samples), xc_(xc), yc_(yc) {
+    set_num_residuals(static_cast<int>(samples->size()));
+    mutable_parameter_block_sizes()->push_back(kNumParams);
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const double* p = parameters[0];
+    double gradient[kNumParams];
+    const bool want_jacobian = jacobians && jacobians[0];
+    for (size_t i = 0; i < samples_->size(); ++i) {
+      const Sample& s = (*samples_)[i];
+      residuals[i] = CrossModel(p, xc_, yc_, s, want_jacobian ? gradient : nullptr) - s.value_dn;
+      if (want_jacobian) std::copy(gradient, gradient + kNumParams, jacobians[0] + i * kNumParams);
+    }
+    return true;
+  }
+
+ private:
+  const std::vector<Sample>* samples_;
+  double xc_, yc_;
+};
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  return values[mid];
+}
+
+// Pixels near the arms (within the start's uncertainty), plus a margin of background.
+std::vector<Sample> SelectSamples(const ImageWindow& window, const CrossFitStart& start, const CrossFitOptions& options) {
+  const double c = std::cos(start.rotation_rad), sn = std::sin(start.rotation_rad);
+  const double band = 0.5 * start.line_width_px + 4.0 * start.blur_sigma_px + options.margin_px + start.line_width_px;
+  const double reach = 0.5 * start.arm_length_px + 4.0 * start.blur_sigma_px + options.margin_px;
+  std::vector<Sample> samples;
+  for (long row = window.rect.y0_px; row < window.rect.y_end_px(); ++row) {
+    for (long col = window.rect.x0_px; col < window.rect.x_end_px(); ++col) {
+      const double dx = col - start.centre_px.x_px, dy = row - start.centre_px.y_px;
+      const double u = c * dx + sn * dy, v = -sn * dx + c * dy;
+      const bool on_u_arm = std::abs(v) <= band && std::abs(u) <= reach;
+      const bool on_v_arm = std::abs(u) <= band && std::abs(v) <= reach;
+      const float value = window.at(col, row);
+      if ((on_u_arm || on_v_arm) && std::isfinite(value)) {
+        samples.push_back({static_cast<double>(col), static_cast<double>(row), static_cast<double>(value)});
+      }
+    }
+  }
+  return samples;
+}
+
+bool Solve(const std::vector<Sample>& samples, double xc, double yc, const CrossFitOptions& options, double* p,
+           std::string* message) {
+  ceres::Problem problem;
+  problem.AddResidualBlock(new CrossCost(&samples, xc, yc), nullptr, p);
+  problem.SetParameterLowerBound(p, kWidthH, 0.2);
+  problem.SetParameterLowerBound(p, kWidthV, 0.2);
+  problem.SetParameterLowerBound(p, kLength, 1.0);
+  problem.SetParameterLowerBound(p, kSigma, options.min_blur_sigma_px);
+  problem.SetParameterLowerBound(p, kTheta, -0.3);
+  problem.SetParameterUpperBound(p, kTheta, 0.3);
+  ceres::Solver::Options solver;
+  solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 11 parameters, thousands of residuals
+  solver.max_num_iterations = options.max_iterations;
+  solver.function_tolerance = 1e-12;
+  solver.parameter_tolerance = 1e-12;
+  solver.gradient_tolerance = 1e-14;
+  solver.num_threads = 1;  // crosses are fitted in parallel one level up
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  *message = summary.message;
+  return summary.IsSolutionUsable();
+}
+
+}  // namespace
+
+bool CrossFitOptions::Check(std::string* why) const {
+  if (!(margin_px >= 0.0)) return *why = "margin_px must be >= 0", false;
+  if (!(min_blur_sigma_px > 0.0)) return *why = "min_blur_sigma_px must be > 0", false;
+  if (!(outlier_threshold > 1.0)) return *why = "outlier_threshold must be > 1", false;
+  if (!(max_outlier_fraction >= 0.0 && max_outlier_fraction < 1.0)) {
+    return *why = "max_outlier_fraction must be in [0, 1)", false;
+  }
+  if (max_iterations < 1) return *why = "max_iterations must be >= 1", false;
+  return true;
+}
+
+PixelRect CrossFitWindow(const CrossFitStart& start, const CrossFitOptions& options) {
+  const double half = 0.5 * start.arm_length_px + 4.0 * start.blur_sigma_px + options.margin_px + start.line_width_px;
+  const long x0 = static_cast<long>(std::floor(start.centre_px.x_px - half));
+  const long y0 = static_cast<long>(std::floor(start.centre_px.y_px - half));
+  const long x1 = static_cast<long>(std::ceil(start.centre_px.x_px + half));
+  const long y1 = static_cast<long>(std::ceil(start.centre_px.y_px + half));
+  return {x0, y0, x1 - x0 + 1, y1 - y0 + 1};
+}
+
+CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, const CrossFitOptions& options) {
+  CrossFitResult result;
+  std::vector<Sample> samples = SelectSamples(window, start, options);
+  if (samples.size() < 4 * kNumParams) {
+    result.summary = "too few pixels around the cross to fit it";
+    return result;
+  }
+  // Start: background from the median, contrast from the pixels on the arms.
+  std::vector<double> values, arm_values;
+  const double c = std::cos(start.rotation_rad), sn = std::sin(start.rotation_rad);
+  for (const Sample& s : samples) {
+    values.push_back(s.value_dn);
+    const double dx = s.x_px - start.centre_px.x_px, dy = s.y_px - start.centre_px.y_px;
+    const double u = c * dx + sn * dy, v = -sn * dx + c * dy;
+    if (std::abs(u) <= 0.5 * start.line_width_px || std::abs(v) <= 0.5 * start.line_width_px) {
+      arm_values.push_back(s.value_dn);
+    }
+  }
+  const double background = Median(values);
+  const double xc = start.centre_px.x_px, yc = start.centre_px.y_px;
+  double p[kNumParams] = {};
+  p[kX0] = start.centre_px.x_px;
+  p[kY0] = start.centre_px.y_px;
+  p[kTheta] = start.rotation_rad;
+  p[kWidthH] = p[kWidthV] = start.line_width_px;
+  p[kLength] = start.arm_length_px;
+  p[kSigma] = std::max(start.blur_sigma_px, options.min_blur_sigma_px);
+  p[kGain] = Median(arm_values) - background;
+  p[kB0] = background;
+  if (p[kGain] == 0.0) {
+    result.summary = "no contrast between the arms and the background";
+    return result;
+  }
+
+  std::string message;
+  bool usable = Solve(samples, xc, yc, options, p, &message);
+  // Drop pixels that do not belong to a clean cross (dust, scratches, damage)
+  // and solve again without them, so the final fit is plain least squares.
+  const size_t all_pixels = samples.size();
+  for (int round = 0; usable && round < 2; ++round) {
+    std::vector<double> abs_residuals;
+    abs_residuals.reserve(samples.size());
+    for (const Sample& s : samples) abs_residuals.push_back(std::abs(CrossModel(p, xc, yc, s, nullptr) - s.value_dn));
+    const double robust_sigma = 1.4826 * Median(abs_residuals);
+    // The floor keeps a nearly noise-free scan from losing pixels to tiny model
+    // differences; real defects deviate by a large part of the contrast.
+    const double limit = std::max(options.outlier_threshold * robust_sigma, options.min_outlier_contrast * std::abs(p[kGain]));
+    std::vector<Sample> kept;
+    kept.reserve(samples.size());
+    for (size_t i = 0; i < samples.size(); ++i) {
+      if (abs_residuals[i] <= limit) kept.push_back(samples[i]);
+    }
+    if (kept.size() == samples.size()) break;
+    samples.swap(kept);
+    usable = Solve(samples, xc, yc, options, p, &message);
+  }
+  result.outlier_fraction = 1.0 - static_cast<double>(samples.size()) / static_cast<double>(all_pixels);
+  if (!usable) {
+    result.summary = "the cross fit did not converge (" + message + ")";
+    return result;
+  }
+
+  // Formal covariance of the centre: Schur complement of the normal matrix on
+  // the nuisance parameters (pseudo-inverse: width and blur of a thin line are
+  // nearly interchangeable, which must not break the position's sigma).
+  Eigen::Matrix<double, kNumParams, kNumParams> normal = Eigen::Matrix<double, kNumParams, kNumParams>::Zero();
+  double rss = 0.0;
+  for (const Sample& s : samples) {
+    Eigen::Matrix<double, kNumParams, 1> gradient;
+    const double residual = CrossModel(p, xc, yc, s, gradient.data()) - s.value_dn;
+    normal.selfadjointView<Eigen::Lower>().rankUpdate(gradient);
+    rss += residual * residual;
+  }
+  normal = normal.selfadjointView<Eigen::Lower>();
+  const int dof = static_cast<int>(samples.size()) - kNumParams;
+  const double sigma0_sq = rss / std::max(dof, 1);
+  constexpr int kNuisance = kNumParams - 2;
+  const Eigen::Matrix2d npp = normal.topLeftCorner<2, 2>();
+  const Eigen::Matrix<double, 2, kNuisance> npn = normal.topRightCorner<2, kNuisance>();
+  const Eigen::Matrix<double, kNuisance, kNuisance> nnn = normal.bottomRightCorner<kNuisance, kNuisance>();
+  // Scale the nuisance block to unit diagonal before the pseudo-inverse so the tolerance is meaningful.
+  const Eigen::Matrix<double, kNuisance, 1> scale = nnn.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const Eigen::Matrix<double, kNuisance, kNuisance> scaled = scale.asDiagonal() * nnn * scale.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, kNuisance, kNuisance>> eigen(scaled);
+  Eigen::Matrix<double, kNuisance, 1> inverse_values;
+  const double tolerance = 1e-10 * eigen.eigenvalues().maxCoeff();
+  for (int i = 0; i < kNuisance; ++i) {
+    inverse_values[i] = eigen.eigenvalues()[i] > tolerance ? 1.0 / eigen.eigenvalues()[i] : 0.0;
+  }
+  const Eigen::Matrix<double, kNuisance, kNuisance> nnn_pinv =
+      scale.asDiagonal() * eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose() *
+      scale.asDiagonal();
+  const Eigen::Matrix2d schur = npp - npn * nnn_pinv * npn.transpose();
+  const Eigen::Matrix2d covariance = sigma0_sq * schur.inverse();
+
+  result.converged = true;
+  result.centre_px = {p[kX0], p[kY0]};
+  result.sigma_x_px = std::sqrt(std::max(covariance(0, 0), 0.0));
+  result.sigma_y_px = std::sqrt(std::max(covariance(1, 1), 0.0));
+  result.correlation_xy = covariance(0, 1) / std::max(result.sigma_x_px * result.sigma_y_px, 1e-300);
+  result.rotation_rad = p[kTheta];
+  result.width_h_px = p[kWidthH];
+  result.width_v_px = p[kWidthV];
+  result.arm_length_px = p[kLength];
+  result.blur_sigma_px = p[kSigma];
+  result.gain_dn = p[kGain];
+  result.background_dn = p[kB0];
+  result.residual_sigma_dn = std::sqrt(sigma0_sq);
+  result.pixels_used = static_cast<int>(samples.size());
+  std::ostringstream summary;
+  summary << "fitted on " << samples.size() << " px (" << static_cast<int>(100.0 * result.outlier_fraction + 0.5)
+          << "% dropped as outliers), residual sigma " << result.residual_sigma_dn << " DN";
+  result.summary = summary.str();
+  return result;
+}
+
+}  // namespace platemeter

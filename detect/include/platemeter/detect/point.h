@@ -5,18 +5,16 @@
 #include <string>
 
 #include "platemeter/core/pixel.h"
+#include "platemeter/core/point_status.h"
 
 namespace platemeter {
 
-enum class PointStatus { kMeasured, kRejected, kMissing, kPredicted };
-const char* PointStatusName(PointStatus status);
-
 struct DetectedPoint {
   std::string id;                 // X{i}Y{j} for reseau crosses, the table name for fiducials
-  std::string kind;               // "reseau", "fiducial", "star", "trail_dot", "passpoint"
+  PointKind kind = PointKind::kReseau;
   PointStatus status = PointStatus::kMissing;
-  std::string reason;             // for rejected/missing: low_contrast, defect, poor_fit, outlier, outside_scan
-  PixelPoint position_px;         // measured (or, for kPredicted, predicted) centre
+  std::string reason;             // for rejected/missing: low_contrast, defect, poor_fit, outlier, outside_scan, not_found
+  PixelPoint position_px;         // measured (or, for kPredicted/kMissing, predicted) centre
   double sigma_x_px = 0.0;        // formal standard deviations from the fit
   double sigma_y_px = 0.0;
   double correlation_xy = 0.0;

@@ -110,16 +110,35 @@ std::vector<Sample> SelectSamples(const ImageWindow& window, const CrossFitStart
   return samples;
 }
 
-bool Solve(const std::vector<Sample>& samples, double xc, double yc, const CrossFitOptions& options, double* p,
-           std::string* message) {
+// Solves for all parameters, or with the shape (rotation, widths, length, blur)
+// held at its current values when `shape_fixed`: a first pass that cannot wander
+// off into a thin-line degeneracy while the position is still rough.
+bool Solve(const std::vector<Sample>& samples, double xc, double yc, const CrossFitOptions& options,
+           const CrossFitStart& start, bool shape_fixed, double* p, std::string* message) {
   ceres::Problem problem;
   problem.AddResidualBlock(new CrossCost(&samples, xc, yc), nullptr, p);
-  problem.SetParameterLowerBound(p, kWidthH, 0.2);
-  problem.SetParameterLowerBound(p, kWidthV, 0.2);
-  problem.SetParameterLowerBound(p, kLength, 1.0);
-  problem.SetParameterLowerBound(p, kSigma, options.min_blur_sigma_px);
-  problem.SetParameterLowerBound(p, kTheta, -0.3);
-  problem.SetParameterUpperBound(p, kTheta, 0.3);
+  // The start is within about a line width; a fit that wants to leave this box has found something else.
+  const double reach_px = 2.0 * start.line_width_px + 2.0;
+  problem.SetParameterLowerBound(p, kX0, start.centre_px.x_px - reach_px);
+  problem.SetParameterUpperBound(p, kX0, start.centre_px.x_px + reach_px);
+  problem.SetParameterLowerBound(p, kY0, start.centre_px.y_px - reach_px);
+  problem.SetParameterUpperBound(p, kY0, start.centre_px.y_px + reach_px);
+  if (shape_fixed) {
+    problem.SetManifold(p, new ceres::SubsetManifold(kNumParams, {kTheta, kWidthH, kWidthV, kLength, kSigma}));
+  } else {
+    // Plausible ranges around the definition, so a bad pixel patch cannot turn the cross into something else.
+    const double w = start.line_width_px;
+    for (int k : {kWidthH, kWidthV}) {
+      problem.SetParameterLowerBound(p, k, 0.2 * w);
+      problem.SetParameterUpperBound(p, k, 3.0 * w + 1.0);
+    }
+    problem.SetParameterLowerBound(p, kLength, 0.7 * start.arm_length_px);
+    problem.SetParameterUpperBound(p, kLength, 1.3 * start.arm_length_px + 2.0);
+    problem.SetParameterLowerBound(p, kSigma, options.min_blur_sigma_px);
+    problem.SetParameterUpperBound(p, kSigma, 2.0 * w + 3.0);
+    problem.SetParameterLowerBound(p, kTheta, start.rotation_rad - 0.1);
+    problem.SetParameterUpperBound(p, kTheta, start.rotation_rad + 0.1);
+  }
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 11 parameters, thousands of residuals
   solver.max_num_iterations = options.max_iterations;
@@ -162,18 +181,20 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
     result.summary = "too few pixels around the cross to fit it";
     return result;
   }
-  // Start: background from the median, contrast from the pixels on the arms.
-  std::vector<double> values, arm_values;
-  const double c = std::cos(start.rotation_rad), sn = std::sin(start.rotation_rad);
-  for (const Sample& s : samples) {
-    values.push_back(s.value_dn);
-    const double dx = s.x_px - start.centre_px.x_px, dy = s.y_px - start.centre_px.y_px;
-    const double u = c * dx + sn * dy, v = -sn * dx + c * dy;
-    if (std::abs(u) <= 0.5 * start.line_width_px || std::abs(v) <= 0.5 * start.line_width_px) {
-      arm_values.push_back(s.value_dn);
-    }
+  // Start: background from the median; contrast from the tail of the pixel
+  // values on the side away from the background (dark or bright crosses).
+  std::vector<double> values;
+  values.reserve(samples.size());
+  for (const Sample& s : samples) values.push_back(s.value_dn);
+  std::sort(values.begin(), values.end());
+  const double background = values[values.size() / 2];
+  const size_t tail = std::max<size_t>(3, values.size() / 40);
+  double low = 0, high = 0;
+  for (size_t i = 0; i < tail; ++i) {
+    low += values[i] / tail;
+    high += values[values.size() - 1 - i] / tail;
   }
-  const double background = Median(values);
+  const double gain = (background - low > high - background) ? low - background : high - background;
   const double xc = start.centre_px.x_px, yc = start.centre_px.y_px;
   double p[kNumParams] = {};
   p[kX0] = start.centre_px.x_px;
@@ -181,16 +202,18 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
   p[kTheta] = start.rotation_rad;
   p[kWidthH] = p[kWidthV] = start.line_width_px;
   p[kLength] = start.arm_length_px;
-  p[kSigma] = std::max(start.blur_sigma_px, options.min_blur_sigma_px);
-  p[kGain] = Median(arm_values) - background;
+  // A generous blur widens the basin of the first pass (thin lines, rough start).
+  p[kSigma] = std::max({start.blur_sigma_px, options.min_blur_sigma_px, 0.5 * start.line_width_px + 0.5});
+  p[kGain] = gain / std::min(1.0, start.line_width_px);  // a sub-pixel line covers only part of a pixel
   p[kB0] = background;
-  if (p[kGain] == 0.0) {
+  if (gain == 0.0) {
     result.summary = "no contrast between the arms and the background";
     return result;
   }
 
   std::string message;
-  bool usable = Solve(samples, xc, yc, options, p, &message);
+  bool usable = Solve(samples, xc, yc, options, start, /*shape_fixed=*/true, p, &message) &&
+                Solve(samples, xc, yc, options, start, /*shape_fixed=*/false, p, &message);
   // Drop pixels that do not belong to a clean cross (dust, scratches, damage)
   // and solve again without them, so the final fit is plain least squares.
   const size_t all_pixels = samples.size();
@@ -209,7 +232,7 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
     }
     if (kept.size() == samples.size()) break;
     samples.swap(kept);
-    usable = Solve(samples, xc, yc, options, p, &message);
+    usable = Solve(samples, xc, yc, options, start, /*shape_fixed=*/false, p, &message);
   }
   result.outlier_fraction = 1.0 - static_cast<double>(samples.size()) / static_cast<double>(all_pixels);
   if (!usable) {

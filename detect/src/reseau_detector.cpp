@@ -233,7 +233,8 @@ ReseauDetection DetectReseau(const Image& image, const MasterGrid& grid, const R
   const double spacing_mm = SpacingMm(grid);
 
   auto clock = std::chrono::steady_clock::now();
-  result.overview_factor = OverviewFactorFor(options.candidates.line_width_px);
+  result.overview_factor = OverviewFactorFor(options.candidates.line_width_px,
+                                             std::max(image.info().width_px, image.info().height_px));
   const Overview overview = BuildOverview(image, result.overview_factor);
   result.seconds_overview = SecondsSince(clock);
 

@@ -25,7 +25,10 @@ struct CrossCandidateOptions {
 
 std::vector<CrossCandidate> FindCrossCandidates(const Overview& overview, const CrossCandidateOptions& options);
 
-// The overview factor that keeps a line of this width about `target_line_px` wide.
-int OverviewFactorFor(double line_width_px, double target_line_px = 1.5);
+// The overview factor that keeps a line of this width about `target_line_px`
+// wide, raised if needed so the overview's long side stays within max_overview_px
+// (its memory: 4 bytes a pixel).
+int OverviewFactorFor(double line_width_px, long scan_long_side_px, double target_line_px = 1.5,
+                      long max_overview_px = 4096);
 
 }  // namespace platemeter

@@ -43,36 +43,50 @@ std::vector<CrossCandidate> FindCrossCandidates(const Overview& overview, const 
   const cv::Mat image(static_cast<int>(overview.height_px), static_cast<int>(overview.width_px), CV_32F,
                       const_cast<float*>(overview.values_dn.data()));
   if (image.rows < size || image.cols < size) return {};
-  cv::Mat score;
-  cv::matchTemplate(image, templ, score, cv::TM_CCOEFF_NORMED);
-  // Local extrema of |score| within half an arm.
-  cv::Mat magnitude = cv::abs(score);
-  cv::Mat dilated;
+  // Scores in tiles: matchTemplate's buffers (integral images, DFTs) grow with
+  // the image, so a whole overview would cost several times its own memory.
+  // Each tile's score is computed with a halo of half the suppression window,
+  // and only peaks in the tile's core are kept, so tiling changes nothing.
+  const int score_rows = image.rows - size + 1, score_cols = image.cols - size + 1;
   const int nms = std::max(3, 2 * static_cast<int>(half_arm) + 1);
-  cv::dilate(magnitude, dilated, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(nms, nms)));
+  const int halo = nms / 2 + 1;
+  constexpr int kTile = 1024;
   std::vector<CrossCandidate> candidates;
-  for (int r = 0; r < score.rows; ++r) {
-    const float* m = magnitude.ptr<float>(r);
-    const float* d = dilated.ptr<float>(r);
-    const float* s = score.ptr<float>(r);
-    for (int c = 0; c < score.cols; ++c) {
-      if (m[c] < options.min_abs_score || m[c] < d[c]) continue;
-      // Sub-pixel peak by a parabola through the neighbours (enough to start the fit).
-      double ox = 0, oy = 0;
-      if (c > 0 && c + 1 < score.cols) {
-        const double a = m[c - 1], b = m[c], e = m[c + 1];
-        const double denom = a - 2 * b + e;
-        if (denom < 0) ox = std::clamp(0.5 * (a - e) / denom, -0.5, 0.5);
+  for (int ty = 0; ty < score_rows; ty += kTile) {
+    for (int tx = 0; tx < score_cols; tx += kTile) {
+      const int x0 = std::max(0, tx - halo), y0 = std::max(0, ty - halo);
+      const int x1 = std::min(score_cols, tx + kTile + halo), y1 = std::min(score_rows, ty + kTile + halo);
+      cv::Mat score;
+      cv::matchTemplate(image(cv::Rect(x0, y0, x1 - x0 + size - 1, y1 - y0 + size - 1)), templ, score,
+                        cv::TM_CCOEFF_NORMED);
+      // Local extrema of |score| within half an arm.
+      const cv::Mat magnitude = cv::abs(score);
+      cv::Mat dilated;
+      cv::dilate(magnitude, dilated, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(nms, nms)));
+      for (int r = ty - y0; r < std::min(ty + kTile, score_rows) - y0; ++r) {
+        const float* m = magnitude.ptr<float>(r);
+        const float* d = dilated.ptr<float>(r);
+        const float* sc = score.ptr<float>(r);
+        for (int c = tx - x0; c < std::min(tx + kTile, score_cols) - x0; ++c) {
+          if (m[c] < options.min_abs_score || m[c] < d[c]) continue;
+          // Sub-pixel peak by a parabola through the neighbours (enough to start the fit).
+          double ox = 0, oy = 0;
+          if (c > 0 && c + 1 < score.cols) {
+            const double a = m[c - 1], b = m[c], e = m[c + 1];
+            const double denom = a - 2 * b + e;
+            if (denom < 0) ox = std::clamp(0.5 * (a - e) / denom, -0.5, 0.5);
+          }
+          if (r > 0 && r + 1 < score.rows) {
+            const double a = magnitude.at<float>(r - 1, c), b = m[c], e = magnitude.at<float>(r + 1, c);
+            const double denom = a - 2 * b + e;
+            if (denom < 0) oy = std::clamp(0.5 * (a - e) / denom, -0.5, 0.5);
+          }
+          CrossCandidate candidate;
+          candidate.position_px = overview.ToScan(x0 + c + half + ox, y0 + r + half + oy);
+          candidate.score = sc[c];
+          candidates.push_back(candidate);
+        }
       }
-      if (r > 0 && r + 1 < score.rows) {
-        const double a = magnitude.at<float>(r - 1, c), b = m[c], e = magnitude.at<float>(r + 1, c);
-        const double denom = a - 2 * b + e;
-        if (denom < 0) oy = std::clamp(0.5 * (a - e) / denom, -0.5, 0.5);
-      }
-      CrossCandidate candidate;
-      candidate.position_px = overview.ToScan(c + half + ox, r + half + oy);
-      candidate.score = s[c];
-      candidates.push_back(candidate);
     }
   }
   std::sort(candidates.begin(), candidates.end(),

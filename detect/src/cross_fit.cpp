@@ -142,9 +142,10 @@ bool Solve(const std::vector<Sample>& samples, double xc, double yc, const Cross
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 11 parameters, thousands of residuals
   solver.max_num_iterations = options.max_iterations;
-  solver.function_tolerance = 1e-12;
-  solver.parameter_tolerance = 1e-12;
-  solver.gradient_tolerance = 1e-14;
+  // Converged when a step moves the centre by far less than its sigma.
+  solver.function_tolerance = 1e-10;
+  solver.parameter_tolerance = 1e-9;
+  solver.gradient_tolerance = 1e-12;
   solver.num_threads = 1;  // crosses are fitted in parallel one level up
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);

@@ -1,0 +1,343 @@
+// Reseau-cross detection on simulator plates with exact truth: accuracy against
+// the Cramer-Rao bound, honesty of the formal sigmas, ids, false points, speed
+// and memory; and, on the same crosses of the same scans, the method of the
+// public tools (ISIS findrx, MicMac, HIPP, spymicmac): OpenCV matchTemplate
+// (TM_CCOEFF_NORMED) with a paraboloid fit of the peak.
+//
+//   bench_reseau [--cases a,b,...] [--large PX] [--keep DIR]
+//
+// Each case renders an SN-004 terrain plate (Ikogon B, calibrated values) with
+// the simulator, then runs the shipped `platemeter detect` on it as its own
+// process, so the time and peak RSS printed are the tool's alone.
+// --large PX adds a PX x PX 16-bit plate (e.g. 16000).
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "platemeter/core/image.h"
+#include "platemeter/detect/reseau_detector.h"
+#include "platemeter/grids/registry.h"
+#include "platemeter/measure/measurement_file.h"
+#include "platemeter/samples/simulate.h"
+#include "platemeter/samples/spec.h"
+
+namespace {
+
+using namespace platemeter;
+
+struct Case {
+  std::string name;
+  double pixel_um = 10.0;
+  int bits = 16;
+  int orientation_deg = 0;
+  bool mirrored = false;
+  bool bright = false;       // bright crosses (a negative scan)
+  double noise_scale = 1.0;  // sensor and grain sigmas times this
+  bool degraded = false;     // dust, scratches, three damaged crosses, a false '+' 3 mm from one
+  long size_px = 0;          // explicit square size (large case)
+};
+
+std::string SpecText(const Case& c) {
+  const double level = c.bits == 8 ? 160.0 : 26000.0;
+  const double contrast = c.bits == 8 ? 70.0 : 12000.0;
+  const double sensor = (c.bits == 8 ? 1.2 : 120.0) * c.noise_scale;
+  const double grain = (c.bits == 8 ? 1.5 : 200.0) * c.noise_scale;
+  std::ostringstream s;
+  s << "name = \"bench-" << c.name << "\"\ncamera = \"sn004-terrain\"\nseed = 11\n"
+    << "[output]\npixel_size_um = " << c.pixel_um << "\nbits = " << c.bits << "\nmargin_mm = 1.0\n";
+  if (c.size_px > 0) s << "width_px = " << c.size_px << "\nheight_px = " << c.size_px << "\n";
+  s << "[thermal]\ntemperature_degC = 22.0\ncalibration_temperature_degC = 20.0\n"
+    << "[emulsion]\ndepth_um = 8.0\nrefractive_index = 1.65\n"
+    << "[film]\naffine_ppm = [45.0, 6.0, -4.0, -30.0]\nshift_um = [1.5, -2.0]\n"
+    << "[[film.wave]]\namplitude_um = [1.2, -0.8]\nwavelength_mm = 60.0\ndirection_deg = 30.0\nphase_deg = 10.0\n"
+    << "[scanner]\nrotation_deg = 0.3\nnon_orthogonality_arcsec = 12.0\noffset_px = [3.3, -2.7]\n"
+    << "orientation_deg = " << c.orientation_deg << "\nmirrored = " << (c.mirrored ? "true" : "false") << "\n"
+    << "[marks.reseau]\npolarity = \"" << (c.bright ? "bright" : "dark") << "\"\ncontrast_dn = " << contrast << "\n"
+    << "[marks.fiducials]\npolarity = \"bright\"\ncontrast_dn = " << contrast << "\n"
+    << "[background]\nlevel_dn = " << level << "\nterrain_amplitude_dn = " << 0.15 * level
+    << "\nterrain_scale_mm = 15.0\nvignetting_fraction = 0.08\nvignetting_radius_mm = 80.0\n"
+    << "[noise]\nblur_sigma_um = 6.0\nsensor_sigma_dn = " << sensor << "\ngrain_sigma_dn = " << grain << "\n";
+  if (c.degraded) {
+    s << "[defects]\ndust_count = 40\ndust_contrast_dn = " << 0.5 * contrast << "\nscratch_count = 4\n"
+      << "scratch_contrast_dn = " << 0.4 * contrast << "\n"
+      << "damaged_crosses = [\"X3Y9\", \"X7Y4\", \"X10Y2\"]\ndamage_fraction = 0.3\n"
+      << "[[defects.false_mark]]\nnear = \"X3Y9\"\noffset_um = [3000.0, 0.0]\n";
+  }
+  return s.str();
+}
+
+// Is a cross within reach of a dust blob or scratch (its support box grown by the defect)?
+bool Touched(const sim::SimulatedPlate& plate, const sim::SceneMark& cross) {
+  const double px_per_um = std::sqrt(std::abs(cross.px_from_um[0] * cross.px_from_um[3] -
+                                              cross.px_from_um[1] * cross.px_from_um[2]));
+  const double half_px = 0.5 * cross.size_um * px_per_um + 3.0;
+  for (int index : plate.dust) {
+    const sim::SceneMark& d = plate.scene.marks[index];
+    const double r = 0.6 * d.size_um * px_per_um + 3.0;
+    if (std::abs(d.centre_px.x_px - cross.centre_px.x_px) < half_px + r &&
+        std::abs(d.centre_px.y_px - cross.centre_px.y_px) < half_px + r)
+      return true;
+  }
+  for (int index : plate.scratches) {
+    const sim::SceneMark& s = plate.scene.marks[index];
+    // Scratch direction in pixels: the mark-frame direction mapped by its local map.
+    const double u = std::cos(s.corner_angle_rad), v = std::sin(s.corner_angle_rad);
+    double dx = s.px_from_um[0] * u + s.px_from_um[1] * v, dy = s.px_from_um[2] * u + s.px_from_um[3] * v;
+    const double norm = std::hypot(dx, dy);
+    dx /= norm;
+    dy /= norm;
+    const double half_length = 0.5 * s.size_um * px_per_um;
+    const double ex = cross.centre_px.x_px - s.centre_px.x_px, ey = cross.centre_px.y_px - s.centre_px.y_px;
+    const double along = std::clamp(ex * dx + ey * dy, -half_length, half_length);
+    const double distance = std::hypot(ex - along * dx, ey - along * dy);
+    if (distance < half_px * std::sqrt(2.0) + s.line_width_um * px_per_um) return true;
+  }
+  return false;
+}
+
+// The public tools' method: normalized correlation with an ideal cross template
+// around the expected place, then a parabola through the peak in x and in y.
+PixelPoint CorrelationPeak(const Image& image, PixelPoint around, double line_px, double arm_px, bool bright,
+                           bool* ok) {
+  const int half = static_cast<int>(std::ceil(0.5 * arm_px + line_px));
+  const int size = 2 * half + 1;
+  cv::Mat templ(size, size, CV_32F);
+  for (int r = 0; r < size; ++r)
+    for (int c = 0; c < size; ++c) {
+      auto coverage = [](double t, double hw) { return std::clamp(std::min(t + 0.5, hw) - std::max(t - 0.5, -hw), 0.0, 1.0); };
+      const double h = coverage(r - half, 0.5 * line_px) * coverage(c - half, 0.5 * arm_px);
+      const double v = coverage(c - half, 0.5 * line_px) * coverage(r - half, 0.5 * arm_px);
+      templ.at<float>(r, c) = static_cast<float>((bright ? 1 : -1) * (h + v - h * v));
+    }
+  const int search = 8;
+  const PixelRect rect = image.Clip({static_cast<long>(std::lround(around.x_px)) - half - search,
+                                     static_cast<long>(std::lround(around.y_px)) - half - search, size + 2 * search,
+                                     size + 2 * search});
+  *ok = rect.width_px == size + 2 * search && rect.height_px == size + 2 * search;
+  if (!*ok) return around;
+  ImageWindow window = image.ReadWindow(rect);
+  const cv::Mat patch(static_cast<int>(rect.height_px), static_cast<int>(rect.width_px), CV_32F, window.values_dn.data());
+  cv::Mat score;
+  cv::matchTemplate(patch, templ, score, cv::TM_CCOEFF_NORMED);
+  cv::Point peak;
+  cv::minMaxLoc(score, nullptr, nullptr, nullptr, &peak);
+  double ox = 0, oy = 0;
+  if (peak.x > 0 && peak.x + 1 < score.cols) {
+    const double a = score.at<float>(peak.y, peak.x - 1), b = score.at<float>(peak.y, peak.x), e = score.at<float>(peak.y, peak.x + 1);
+    if (a - 2 * b + e < 0) ox = 0.5 * (a - e) / (a - 2 * b + e);
+  }
+  if (peak.y > 0 && peak.y + 1 < score.rows) {
+    const double a = score.at<float>(peak.y - 1, peak.x), b = score.at<float>(peak.y, peak.x), e = score.at<float>(peak.y + 1, peak.x);
+    if (a - 2 * b + e < 0) oy = 0.5 * (a - e) / (a - 2 * b + e);
+  }
+  return {rect.x0_px + half + peak.x + ox, rect.y0_px + half + peak.y + oy};
+}
+
+struct Stats {
+  std::vector<double> ex, ey, crb, sigma;
+  void Add(double dx, double dy, double crb_px, double sigma_px) {
+    ex.push_back(dx);
+    ey.push_back(dy);
+    crb.push_back(crb_px);
+    sigma.push_back(sigma_px);
+  }
+  static double Mean(const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x;
+    return v.empty() ? 0 : s / v.size();
+  }
+  static double Median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  }
+  double Rms() const {  // per axis, both axes pooled
+    double s = 0;
+    for (size_t i = 0; i < ex.size(); ++i) s += ex[i] * ex[i] + ey[i] * ey[i];
+    return ex.empty() ? 0 : std::sqrt(s / (2.0 * ex.size()));
+  }
+  double Max() const {
+    double m = 0;
+    for (size_t i = 0; i < ex.size(); ++i) m = std::max({m, std::abs(ex[i]), std::abs(ey[i])});
+    return m;
+  }
+};
+
+struct ToolRun {
+  bool ok = false;
+  double seconds = 0.0;
+  double peak_rss_mb = 0.0;
+};
+
+// Runs `platemeter detect` as its own process (its peak RSS is its own).
+ToolRun RunDetect(const std::string& scan, const std::string& out_dir) {
+  ToolRun run;
+  const auto start = std::chrono::steady_clock::now();
+  const pid_t child = fork();
+  if (child == 0) {
+    const std::string log = out_dir + "/detect.log";
+    if (!std::freopen(log.c_str(), "w", stdout) || !std::freopen(log.c_str(), "a", stderr)) _exit(126);
+    execl(PLATEMETER_BIN, "platemeter", "detect", scan.c_str(), "--camera", "sn004-terrain", "-o", out_dir.c_str(),
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  int status = 0;
+  rusage usage{};
+  wait4(child, &status, 0, &usage);
+  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  run.peak_rss_mb = usage.ru_maxrss / 1024.0;
+  run.ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  return run;
+}
+
+// Scores the tool's measurement file against the truth and prints one line.
+void Score(const Case& c, const sim::SimulatedPlate& plate, const std::string& scan, const MasterGrid& grid,
+           const ToolRun& run, const MeasurementFile& measured) {
+  const Image image = Image::Open(scan);
+  std::map<std::string, const MeasuredPoint*> truth;
+  std::map<std::string, int> mark_of;
+  for (size_t i = 0; i < plate.truth.size(); ++i) {
+    if (plate.truth[i].kind != PointKind::kReseau) continue;
+    truth[plate.truth[i].id] = &plate.truth[i];
+    mark_of[plate.truth[i].id] = plate.truth_mark[i];
+  }
+  auto has_flag = [](const MeasuredPoint& p, const char* flag) {
+    return std::find(p.flags.begin(), p.flags.end(), flag) != p.flags.end();
+  };
+  Stats clean, baseline;
+  int wrong_ids = 0, false_points = 0, touched_rejected = 0, touched_within = 0, touched_beyond = 0;
+  std::map<std::string, int> reasons;
+  int measured_count = 0, rejected_count = 0, missing_count = 0;
+  for (const MeasuredPoint& p : measured.points) {
+    if (p.kind != PointKind::kReseau) continue;
+    measured_count += p.status == PointStatus::kMeasured;
+    rejected_count += p.status == PointStatus::kRejected;
+    missing_count += p.status == PointStatus::kMissing;
+    for (const std::string& flag : p.flags) reasons[flag]++;
+    const MeasuredPoint* t = truth.count(p.id) ? truth[p.id] : nullptr;
+    const bool absent = !t || has_flag(*t, "absent");
+    if (p.status != PointStatus::kMeasured) {
+      if (t && !absent && mark_of[p.id] >= 0 && (has_flag(*t, "damaged") || Touched(plate, plate.scene.marks[mark_of[p.id]])))
+        ++touched_rejected;
+      continue;
+    }
+    if (absent) {
+      ++false_points;
+      continue;
+    }
+    const double dx = *p.x_px - *t->x_px, dy = *p.y_px - *t->y_px;
+    if (std::hypot(dx, dy) > 3.0) {
+      ++wrong_ids;
+      continue;
+    }
+    const bool touched = has_flag(*t, "damaged") || Touched(plate, plate.scene.marks[mark_of[p.id]]);
+    if (touched) {
+      (std::abs(dx) <= 3 * *p.sigma_x_px && std::abs(dy) <= 3 * *p.sigma_y_px ? touched_within : touched_beyond)++;
+      continue;
+    }
+    clean.Add(dx, dy, std::hypot(t->crb_x_px.value_or(0), t->crb_y_px.value_or(0)) / std::sqrt(2.0),
+              std::hypot(*p.sigma_x_px, *p.sigma_y_px) / std::sqrt(2.0));
+    // Baseline on the same cross, searched around the truth (its best case).
+    bool ok = false;
+    const double px_per_um = 1.0 / plate.pixel_size_um;
+    const PixelPoint peak = CorrelationPeak(image, {*t->x_px, *t->y_px}, grid.mark.line_width_um * px_per_um,
+                                            grid.mark.arm_length_um * px_per_um, c.bright, &ok);
+    if (ok) baseline.Add(peak.x_px - *t->x_px, peak.y_px - *t->y_px, clean.crb.back(), 0);
+  }
+  const double megapixels = image.info().width_px * static_cast<double>(image.info().height_px) / 1e6;
+  std::printf("%-22s %6.1f %5d %4ld %4d %4d %4d %3d %3d | %8.4f %8.4f %7.4f %7.4f %7.4f %6.2f %6.2f | %7.4f %6.2f | %3d %3d %3d | %6.2f %7.1f %6.1f",
+              c.name.c_str(), plate.pixel_size_um, c.bits, image.info().width_px, measured_count, rejected_count,
+              missing_count, wrong_ids, false_points, Stats::Mean(clean.ex), Stats::Mean(clean.ey), clean.Rms(),
+              clean.Max(), Stats::Median(clean.crb), clean.Rms() / Stats::Median(clean.crb),
+              clean.Rms() / Stats::Median(clean.sigma), baseline.Rms(), baseline.Rms() / Stats::Median(baseline.crb),
+              touched_rejected, touched_within, touched_beyond, run.seconds, megapixels / run.seconds,
+              measured_count / run.seconds);
+  std::printf(" %6.0f MB ", run.peak_rss_mb);
+  for (const auto& [reason, count] : reasons) std::printf(" %s=%d", reason.c_str(), count);
+  std::printf("\n");
+  std::fflush(stdout);
+}
+
+std::vector<Case> AllCases() {
+  std::vector<Case> cases;
+  auto add = [&](Case c) { cases.push_back(c); };
+  add({.name = "clean-10um"});
+  add({.name = "clean-5um", .pixel_um = 5.0});
+  add({.name = "clean-20um", .pixel_um = 20.0});
+  add({.name = "noisy-10um", .noise_scale = 4.0});
+  add({.name = "8bit-10um", .bits = 8});
+  add({.name = "rot90-10um", .orientation_deg = 90});
+  add({.name = "rot270-mirrored-10um", .orientation_deg = 270, .mirrored = true});
+  add({.name = "bright-crosses-10um", .bright = true});
+  add({.name = "degraded-10um", .degraded = true});
+  add({.name = "degraded-rot180m-8bit", .bits = 8, .orientation_deg = 180, .mirrored = true, .degraded = true});
+  return cases;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<Case> cases = AllCases();
+  std::string keep;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
+    if (arg == "--cases") {
+      std::vector<Case> chosen;
+      std::stringstream list(next());
+      for (std::string name; std::getline(list, name, ',');)
+        for (const Case& c : AllCases())
+          if (c.name == name) chosen.push_back(c);
+      cases = chosen;
+    } else if (arg == "--large") {
+      Case large{.name = "large", .pixel_um = 7.5, .size_px = std::stol(next())};
+      cases.push_back(large);
+    } else if (arg == "--keep") {
+      keep = next();
+    } else {
+      std::fprintf(stderr, "usage: %s [--cases a,b,...] [--large PX] [--keep DIR]\n", argv[0]);
+      return 2;
+    }
+  }
+  const std::string dir = keep.empty() ? (std::filesystem::temp_directory_path() / ("bench_reseau_" + std::to_string(getpid()))).string() : keep;
+  std::filesystem::create_directories(dir);
+  const DefinitionRegistry registry;
+  const MasterGrid& grid = registry.Grid("ikogon-b");
+  std::printf("columns: case, pixel um, bits, width px, measured, rejected, missing, wrong ids, false points |\n"
+              "  clean crosses: bias x, bias y, RMS (px, per axis), max |error|, median CRB, RMS/CRB, RMS/median sigma |\n"
+              "  baseline (matchTemplate + paraboloid) on the same crosses: RMS, RMS/CRB |\n"
+              "  crosses touched by dust/scratches/damage: rejected, measured within 3 sigma, beyond |\n"
+              "  platemeter detect: wall s, Mpixel/s, crosses/s, peak RSS; statuses with reasons\n");
+  for (const Case& c : cases) {
+    sim::SimulatedPlate plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(SpecText(c), c.name), registry);
+    sim::ComputeCramerRaoBounds(&plate);
+    const sim::SimulatedPlate kept = plate;
+    const sim::SimulateOutputs outputs = sim::WriteSimulatedPlate(plate, dir);
+    const ToolRun run = RunDetect(outputs.image_path, dir);
+    if (!run.ok) {
+      std::printf("%-22s platemeter detect FAILED (see %s/detect.log)\n", c.name.c_str(), dir.c_str());
+      continue;
+    }
+    const std::string stem = std::filesystem::path(outputs.image_path).stem().string();
+    Score(c, kept, outputs.image_path, grid, run, ReadMeasurementFile(dir + "/" + stem + ".measurements.csv"));
+    if (keep.empty()) {
+      std::filesystem::remove(outputs.image_path);
+      std::filesystem::remove(outputs.truth_path);
+      std::filesystem::remove(outputs.chain_path);
+    }
+  }
+  if (keep.empty()) std::filesystem::remove_all(dir);
+  return 0;
+}

@@ -11,10 +11,12 @@ namespace platemeter::cli {
 // Options every subcommand sees.
 struct GlobalOptions {
   std::vector<std::string> definition_files;  // extra TOML definition files (--definitions)
-  double cache_memory_mb = 256.0;             // MB; the shared image cache (--cache-mb)
+  double cache_memory_mb = 128.0;             // MB; the shared image cache (--cache-mb); detection reuses few tiles
 };
 
 void RegisterInfoCommand(CLI::App& app, GlobalOptions& global);
 void RegisterGridsCommand(CLI::App& app, GlobalOptions& global);
+void RegisterSimulateCommand(CLI::App& app, GlobalOptions& global);
+void RegisterDetectCommand(CLI::App& app, GlobalOptions& global);
 
 }  // namespace platemeter::cli

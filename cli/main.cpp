@@ -28,6 +28,8 @@ int main(int argc, char** argv) {
 
   cli::RegisterInfoCommand(app, global);
   cli::RegisterGridsCommand(app, global);
+  cli::RegisterSimulateCommand(app, global);
+  cli::RegisterDetectCommand(app, global);
 
   try {
     app.parse(argc, argv);

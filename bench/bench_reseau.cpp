@@ -14,6 +14,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -70,7 +71,7 @@ std::string SpecText(const Case& c) {
     << "\nterrain_scale_mm = 15.0\nvignetting_fraction = 0.08\nvignetting_radius_mm = 80.0\n"
     << "[noise]\nblur_sigma_um = 6.0\nsensor_sigma_dn = " << sensor << "\ngrain_sigma_dn = " << grain << "\n";
   if (c.degraded) {
-    s << "[defects]\ndust_count = 40\ndust_contrast_dn = " << 0.5 * contrast << "\nscratch_count = 4\n"
+    s << "[defects]\ndust_count = 400\ndust_contrast_dn = " << 0.5 * contrast << "\nscratch_count = 25\n"
       << "scratch_contrast_dn = " << 0.4 * contrast << "\n"
       << "damaged_crosses = [\"X3Y9\", \"X7Y4\", \"X10Y2\"]\ndamage_fraction = 0.3\n"
       << "[[defects.false_mark]]\nnear = \"X3Y9\"\noffset_um = [3000.0, 0.0]\n";
@@ -109,7 +110,8 @@ bool Touched(const sim::SimulatedPlate& plate, const sim::SceneMark& cross) {
 
 // The public tools' method: normalized correlation with an ideal cross template
 // around the expected place, then a parabola through the peak in x and in y.
-PixelPoint CorrelationPeak(const Image& image, PixelPoint around, double line_px, double arm_px, bool bright,
+// Like those tools, it works on the whole image in memory.
+PixelPoint CorrelationPeak(const cv::Mat& image, PixelPoint around, double line_px, double arm_px, bool bright,
                            bool* ok) {
   const int half = static_cast<int>(std::ceil(0.5 * arm_px + line_px));
   const int size = 2 * half + 1;
@@ -122,13 +124,12 @@ PixelPoint CorrelationPeak(const Image& image, PixelPoint around, double line_px
       templ.at<float>(r, c) = static_cast<float>((bright ? 1 : -1) * (h + v - h * v));
     }
   const int search = 8;
-  const PixelRect rect = image.Clip({static_cast<long>(std::lround(around.x_px)) - half - search,
-                                     static_cast<long>(std::lround(around.y_px)) - half - search, size + 2 * search,
-                                     size + 2 * search});
-  *ok = rect.width_px == size + 2 * search && rect.height_px == size + 2 * search;
+  const cv::Rect rect(static_cast<int>(std::lround(around.x_px)) - half - search,
+                      static_cast<int>(std::lround(around.y_px)) - half - search, size + 2 * search, size + 2 * search);
+  *ok = rect.x >= 0 && rect.y >= 0 && rect.x + rect.width <= image.cols && rect.y + rect.height <= image.rows;
   if (!*ok) return around;
-  ImageWindow window = image.ReadWindow(rect);
-  const cv::Mat patch(static_cast<int>(rect.height_px), static_cast<int>(rect.width_px), CV_32F, window.values_dn.data());
+  cv::Mat patch;
+  image(rect).convertTo(patch, CV_32F);
   cv::Mat score;
   cv::matchTemplate(patch, templ, score, cv::TM_CCOEFF_NORMED);
   cv::Point peak;
@@ -142,7 +143,27 @@ PixelPoint CorrelationPeak(const Image& image, PixelPoint around, double line_px
     const double a = score.at<float>(peak.y - 1, peak.x), b = score.at<float>(peak.y, peak.x), e = score.at<float>(peak.y + 1, peak.x);
     if (a - 2 * b + e < 0) oy = 0.5 * (a - e) / (a - 2 * b + e);
   }
-  return {rect.x0_px + half + peak.x + ox, rect.y0_px + half + peak.y + oy};
+  return {rect.x + half + peak.x + ox, rect.y + half + peak.y + oy};
+}
+
+// The baseline as its own process (this program run with --baseline-child):
+// reads the whole scan with OpenCV, measures the listed crosses, writes
+// "x y ok" lines. Arguments: scan, positions file, output file, line px, arm px, bright (0/1).
+int BaselineChild(char** argv) {
+  const cv::Mat image = cv::imread(argv[0], cv::IMREAD_UNCHANGED);
+  if (image.empty()) return 3;
+  std::FILE* in = std::fopen(argv[1], "r");
+  std::FILE* out = std::fopen(argv[2], "w");
+  if (!in || !out) return 4;
+  double x, y;
+  while (std::fscanf(in, "%lf %lf", &x, &y) == 2) {
+    bool ok = false;
+    const PixelPoint peak = CorrelationPeak(image, {x, y}, std::atof(argv[3]), std::atof(argv[4]), argv[5][0] == '1', &ok);
+    std::fprintf(out, "%.9f %.9f %d\n", peak.x_px, peak.y_px, ok ? 1 : 0);
+  }
+  std::fclose(in);
+  std::fclose(out);
+  return 0;
 }
 
 struct Stats {
@@ -181,16 +202,17 @@ struct ToolRun {
   double peak_rss_mb = 0.0;
 };
 
-// Runs `platemeter detect` as its own process (its peak RSS is its own).
-ToolRun RunDetect(const std::string& scan, const std::string& out_dir) {
+// Runs a program as its own process, so its time and peak RSS are its own.
+ToolRun RunProcess(const std::vector<std::string>& args, const std::string& log) {
   ToolRun run;
   const auto start = std::chrono::steady_clock::now();
   const pid_t child = fork();
   if (child == 0) {
-    const std::string log = out_dir + "/detect.log";
     if (!std::freopen(log.c_str(), "w", stdout) || !std::freopen(log.c_str(), "a", stderr)) _exit(126);
-    execl(PLATEMETER_BIN, "platemeter", "detect", scan.c_str(), "--camera", "sn004-terrain", "-o", out_dir.c_str(),
-          static_cast<char*>(nullptr));
+    std::vector<char*> argv;
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(argv[0], argv.data());
     _exit(127);
   }
   int status = 0;
@@ -204,8 +226,9 @@ ToolRun RunDetect(const std::string& scan, const std::string& out_dir) {
 
 // Scores the tool's measurement file against the truth and prints one line.
 void Score(const Case& c, const sim::SimulatedPlate& plate, const std::string& scan, const MasterGrid& grid,
-           const ToolRun& run, const MeasurementFile& measured) {
+           const ToolRun& run, const MeasurementFile& measured, const std::string& self, const std::string& dir) {
   const Image image = Image::Open(scan);
+  std::vector<std::pair<double, double>> baseline_targets;  // truth positions of the clean crosses
   std::map<std::string, const MeasuredPoint*> truth;
   std::map<std::string, int> mark_of;
   for (size_t i = 0; i < plate.truth.size(); ++i) {
@@ -249,19 +272,35 @@ void Score(const Case& c, const sim::SimulatedPlate& plate, const std::string& s
     }
     clean.Add(dx, dy, std::hypot(t->crb_x_px.value_or(0), t->crb_y_px.value_or(0)) / std::sqrt(2.0),
               std::hypot(*p.sigma_x_px, *p.sigma_y_px) / std::sqrt(2.0));
-    // Baseline on the same cross, searched around the truth (its best case).
-    bool ok = false;
-    const double px_per_um = 1.0 / plate.pixel_size_um;
-    const PixelPoint peak = CorrelationPeak(image, {*t->x_px, *t->y_px}, grid.mark.line_width_um * px_per_um,
-                                            grid.mark.arm_length_um * px_per_um, c.bright, &ok);
-    if (ok) baseline.Add(peak.x_px - *t->x_px, peak.y_px - *t->y_px, clean.crb.back(), 0);
+    baseline_targets.push_back({*t->x_px, *t->y_px});
+  }
+  // Baseline on the same crosses, searched around the truth (its best case).
+  const std::string targets = dir + "/baseline.in", results = dir + "/baseline.out";
+  {
+    std::FILE* f = std::fopen(targets.c_str(), "w");
+    for (const auto& [x, y] : baseline_targets) std::fprintf(f, "%.9f %.9f\n", x, y);
+    std::fclose(f);
+  }
+  const double px_per_um = 1.0 / plate.pixel_size_um;
+  const ToolRun baseline_run = RunProcess({self, "--baseline-child", scan, targets, results,
+                                           std::to_string(grid.mark.line_width_um * px_per_um),
+                                           std::to_string(grid.mark.arm_length_um * px_per_um), c.bright ? "1" : "0"},
+                                          dir + "/baseline.log");
+  if (std::FILE* f = std::fopen(results.c_str(), "r"); f && baseline_run.ok) {
+    double x, y;
+    int ok;
+    for (size_t k = 0; k < baseline_targets.size() && std::fscanf(f, "%lf %lf %d", &x, &y, &ok) == 3; ++k) {
+      if (ok) baseline.Add(x - baseline_targets[k].first, y - baseline_targets[k].second, clean.crb[k], 0);
+    }
+    std::fclose(f);
   }
   const double megapixels = image.info().width_px * static_cast<double>(image.info().height_px) / 1e6;
-  std::printf("%-22s %6.1f %5d %4ld %4d %4d %4d %3d %3d | %8.4f %8.4f %7.4f %7.4f %7.4f %6.2f %6.2f | %7.4f %6.2f | %3d %3d %3d | %6.2f %7.1f %6.1f",
+  std::printf("%-22s %6.1f %5d %4ld %4d %4d %4d %3d %3d | %8.4f %8.4f %7.4f %7.4f %7.4f %6.2f %6.2f | %7.4f %6.2f %6.2f %6.0f MB | %3d %3d %3d | %6.2f %7.1f %6.1f",
               c.name.c_str(), plate.pixel_size_um, c.bits, image.info().width_px, measured_count, rejected_count,
               missing_count, wrong_ids, false_points, Stats::Mean(clean.ex), Stats::Mean(clean.ey), clean.Rms(),
               clean.Max(), Stats::Median(clean.crb), clean.Rms() / Stats::Median(clean.crb),
               clean.Rms() / Stats::Median(clean.sigma), baseline.Rms(), baseline.Rms() / Stats::Median(baseline.crb),
+              baseline_run.seconds, baseline_run.peak_rss_mb,
               touched_rejected, touched_within, touched_beyond, run.seconds, megapixels / run.seconds,
               measured_count / run.seconds);
   std::printf(" %6.0f MB ", run.peak_rss_mb);
@@ -289,6 +328,7 @@ std::vector<Case> AllCases() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 8 && std::string(argv[1]) == "--baseline-child") return BaselineChild(argv + 2);
   std::vector<Case> cases = AllCases();
   std::string keep;
   for (int i = 1; i < argc; ++i) {
@@ -317,7 +357,8 @@ int main(int argc, char** argv) {
   const MasterGrid& grid = registry.Grid("ikogon-b");
   std::printf("columns: case, pixel um, bits, width px, measured, rejected, missing, wrong ids, false points |\n"
               "  clean crosses: bias x, bias y, RMS (px, per axis), max |error|, median CRB, RMS/CRB, RMS/median sigma |\n"
-              "  baseline (matchTemplate + paraboloid) on the same crosses: RMS, RMS/CRB |\n"
+              "  baseline (OpenCV imread + matchTemplate + paraboloid, own process) on the same crosses: RMS, RMS/CRB,\n"
+              "    wall s, peak RSS |\n"
               "  crosses touched by dust/scratches/damage: rejected, measured within 3 sigma, beyond |\n"
               "  platemeter detect: wall s, Mpixel/s, crosses/s, peak RSS; statuses with reasons\n");
   for (const Case& c : cases) {
@@ -325,13 +366,15 @@ int main(int argc, char** argv) {
     sim::ComputeCramerRaoBounds(&plate);
     const sim::SimulatedPlate kept = plate;
     const sim::SimulateOutputs outputs = sim::WriteSimulatedPlate(plate, dir);
-    const ToolRun run = RunDetect(outputs.image_path, dir);
+    const ToolRun run = RunProcess({PLATEMETER_BIN, "detect", outputs.image_path, "--camera", "sn004-terrain", "-o", dir},
+                                   dir + "/detect.log");
     if (!run.ok) {
       std::printf("%-22s platemeter detect FAILED (see %s/detect.log)\n", c.name.c_str(), dir.c_str());
       continue;
     }
     const std::string stem = std::filesystem::path(outputs.image_path).stem().string();
-    Score(c, kept, outputs.image_path, grid, run, ReadMeasurementFile(dir + "/" + stem + ".measurements.csv"));
+    Score(c, kept, outputs.image_path, grid, run, ReadMeasurementFile(dir + "/" + stem + ".measurements.csv"),
+          std::filesystem::canonical("/proc/self/exe").string(), dir);
     if (keep.empty()) {
       std::filesystem::remove(outputs.image_path);
       std::filesystem::remove(outputs.truth_path);

@@ -200,6 +200,7 @@ struct ToolRun {
   bool ok = false;
   double seconds = 0.0;
   double peak_rss_mb = 0.0;
+  double cpu_seconds = 0.0;  // user + system: what the wall time would be on one idle core
 };
 
 // Runs a program as its own process, so its time and peak RSS are its own.
@@ -220,6 +221,7 @@ ToolRun RunProcess(const std::vector<std::string>& args, const std::string& log)
   wait4(child, &status, 0, &usage);
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.peak_rss_mb = usage.ru_maxrss / 1024.0;
+  run.cpu_seconds = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
   run.ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
   return run;
 }
@@ -303,7 +305,7 @@ void Score(const Case& c, const sim::SimulatedPlate& plate, const std::string& s
               baseline_run.seconds, baseline_run.peak_rss_mb,
               touched_rejected, touched_within, touched_beyond, run.seconds, megapixels / run.seconds,
               measured_count / run.seconds);
-  std::printf(" %6.0f MB ", run.peak_rss_mb);
+  std::printf(" %6.0f MB  cpu %.1f s ", run.peak_rss_mb, run.cpu_seconds);
   for (const auto& [reason, count] : reasons) std::printf(" %s=%d", reason.c_str(), count);
   std::printf("\n");
   std::fflush(stdout);
@@ -360,7 +362,7 @@ int main(int argc, char** argv) {
               "  baseline (OpenCV imread + matchTemplate + paraboloid, own process) on the same crosses: RMS, RMS/CRB,\n"
               "    wall s, peak RSS |\n"
               "  crosses touched by dust/scratches/damage: rejected, measured within 3 sigma, beyond |\n"
-              "  platemeter detect: wall s, Mpixel/s, crosses/s, peak RSS; statuses with reasons\n");
+              "  platemeter detect: wall s, Mpixel/s, crosses/s, peak RSS, CPU s (user+system); statuses with reasons\n");
   for (const Case& c : cases) {
     sim::SimulatedPlate plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(SpecText(c), c.name), registry);
     sim::ComputeCramerRaoBounds(&plate);

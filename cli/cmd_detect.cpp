@@ -1,6 +1,6 @@
 // platemeter detect SCAN (--camera NAME | --grid NAME) -o DIR: reseau crosses
-// with ids, positions, sigmas and statuses, into a measurement file and a JSON
-// summary.
+// and fiducial marks with ids, positions, sigmas and statuses, into a
+// measurement file and a JSON summary.
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -11,6 +11,7 @@
 #include "platemeter/core/error.h"
 #include "platemeter/core/image.h"
 #include "platemeter/core/version.h"
+#include "platemeter/detect/fiducial_detector.h"
 #include "platemeter/detect/reseau_detector.h"
 #include "platemeter/grids/registry.h"
 #include "platemeter/measure/atomic_file.h"
@@ -30,7 +31,15 @@ struct DetectArguments {
   bool allow_ambiguous = false;
 };
 
-MeasurementFile ToMeasurementFile(const ReseauDetection& detection, const std::string& scan, const std::string& camera,
+// What the two detectors found, for the outputs.
+struct Detections {
+  std::optional<ReseauDetection> reseau;
+  std::optional<FiducialDetection> fiducials;
+  ScanOrientation orientation;
+  int polarity = -1;
+};
+
+MeasurementFile ToMeasurementFile(const Detections& detections, const std::string& scan, const std::string& camera,
                                   double pixel_size_um) {
   MeasurementFile file;
   file.header.plate_id = std::filesystem::path(scan).stem().string();
@@ -39,9 +48,12 @@ MeasurementFile ToMeasurementFile(const ReseauDetection& detection, const std::s
   file.header.camera = camera;
   file.header.pixel_size_um = pixel_size_um;
   file.header.software_version = std::string("platemeter ") + kVersion;
-  file.header.extra.push_back({"orientation", detection.orientation.Name()});
-  file.header.extra.push_back({"polarity", detection.polarity < 0 ? "dark" : "bright"});
-  for (const DetectedPoint& p : detection.points) {
+  file.header.extra.push_back({"orientation", detections.orientation.Name()});
+  if (detections.reseau) file.header.extra.push_back({"polarity", detections.polarity < 0 ? "dark" : "bright"});
+  std::vector<DetectedPoint> points;
+  if (detections.reseau) points = detections.reseau->points;
+  if (detections.fiducials) points.insert(points.end(), detections.fiducials->points.begin(), detections.fiducials->points.end());
+  for (const DetectedPoint& p : points) {
     MeasuredPoint row;
     row.id = p.id;
     row.kind = p.kind;
@@ -58,23 +70,41 @@ MeasurementFile ToMeasurementFile(const ReseauDetection& detection, const std::s
   return file;
 }
 
-nlohmann::json SummaryJson(const ReseauDetection& d, const std::string& scan, const std::string& grid) {
+nlohmann::json SummaryJson(const Detections& detections, const std::string& scan, const std::string& grid) {
   nlohmann::json j;
   j["scan"] = scan;
-  j["grid"] = grid;
-  j["found"] = d.found;
-  j["orientation"] = d.orientation.Name();
-  j["orientation_ambiguous"] = d.orientation_ambiguous;
-  j["orientation_evidence"] = d.orientation_evidence;
-  j["polarity"] = d.polarity < 0 ? "dark" : "bright";
-  j["counts"] = {{"measured", d.measured}, {"rejected", d.rejected}, {"missing", d.missing},
-                 {"candidates", d.candidates}};
-  j["overview_factor"] = d.overview_factor;
-  j["plate_to_pixel"] = {{"a", {d.plate_to_pixel.a[0], d.plate_to_pixel.a[1], d.plate_to_pixel.a[2], d.plate_to_pixel.a[3]}},
-                         {"t_px", {d.plate_to_pixel.t[0], d.plate_to_pixel.t[1]}}};
-  j["timings_s"] = {{"overview", d.seconds_overview}, {"candidates", d.seconds_candidates},
-                    {"assignment", d.seconds_assignment}, {"refinement", d.seconds_refinement}};
-  j["summary"] = d.summary;
+  j["orientation"] = detections.orientation.Name();
+  if (detections.reseau) {
+    const ReseauDetection& d = *detections.reseau;
+    nlohmann::json r;
+    r["grid"] = grid;
+    r["found"] = d.found;
+    r["orientation"] = d.orientation.Name();
+    r["orientation_ambiguous"] = d.orientation_ambiguous;
+    r["orientation_evidence"] = d.orientation_evidence;
+    r["polarity"] = d.polarity < 0 ? "dark" : "bright";
+    r["counts"] = {{"measured", d.measured}, {"rejected", d.rejected}, {"missing", d.missing},
+                   {"candidates", d.candidates}};
+    r["overview_factor"] = d.overview_factor;
+    r["plate_to_pixel"] = {{"a", {d.plate_to_pixel.a[0], d.plate_to_pixel.a[1], d.plate_to_pixel.a[2], d.plate_to_pixel.a[3]}},
+                           {"t_px", {d.plate_to_pixel.t[0], d.plate_to_pixel.t[1]}}};
+    r["timings_s"] = {{"overview", d.seconds_overview}, {"candidates", d.seconds_candidates},
+                      {"assignment", d.seconds_assignment}, {"refinement", d.seconds_refinement}};
+    r["summary"] = d.summary;
+    j["reseau"] = r;
+  }
+  if (detections.fiducials) {
+    const FiducialDetection& f = *detections.fiducials;
+    nlohmann::json r;
+    r["found"] = f.found;
+    r["used_reseau_prior"] = f.used_prior;
+    r["orientation"] = f.orientation.Name();
+    r["orientation_ambiguous"] = f.orientation_ambiguous;
+    r["orientation_evidence"] = f.orientation_evidence;
+    r["counts"] = {{"measured", f.measured}, {"rejected", f.rejected}, {"missing", f.missing}};
+    r["summary"] = f.summary;
+    j["fiducials"] = r;
+  }
   return j;
 }
 
@@ -82,10 +112,10 @@ nlohmann::json SummaryJson(const ReseauDetection& d, const std::string& scan, co
 
 void RegisterDetectCommand(CLI::App& app, GlobalOptions& global) {
   auto args = std::make_shared<DetectArguments>();
-  auto* cmd = app.add_subcommand("detect", "find the reseau crosses of a scan and measure them");
+  auto* cmd = app.add_subcommand("detect", "find the reseau crosses and fiducials of a scan and measure them");
   cmd->add_option("SCAN", args->scan, "the scan")->required();
-  auto* camera = cmd->add_option("--camera", args->camera, "camera definition (its grid is searched)");
-  auto* grid = cmd->add_option("--grid", args->grid, "master grid to search for");
+  auto* camera = cmd->add_option("--camera", args->camera, "camera definition (its grid and fiducials are searched)");
+  auto* grid = cmd->add_option("--grid", args->grid, "master grid to search for (no fiducials)");
   camera->excludes(grid);
   cmd->add_option("--pixel-size-um", args->pixel_size_um, "scan pixel size in um (default: the TIFF resolution tags)");
   cmd->add_option("--orientation", args->orientation,
@@ -96,37 +126,62 @@ void RegisterDetectCommand(CLI::App& app, GlobalOptions& global) {
   cmd->callback([args, &global] {
     if (args->camera.empty() && args->grid.empty()) throw Error("detect", "give --camera NAME or --grid NAME");
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
-    std::string grid_name = args->grid;
-    if (!args->camera.empty()) {
-      grid_name = registry.Camera(args->camera).grid;
-      if (grid_name.empty()) throw Error("camera '" + args->camera + "'", "has no reseau grid to detect");
+    const CameraDefinition* camera = args->camera.empty() ? nullptr : &registry.Camera(args->camera);
+    const std::string grid_name = camera ? camera->grid : args->grid;
+    const bool has_fiducials = camera && (!camera->fiducial_set.empty() || camera->format_corners_as_fiducials);
+    if (grid_name.empty() && !has_fiducials) {
+      throw Error("camera '" + args->camera + "'", "has neither a reseau grid nor fiducials to detect");
     }
-    const MasterGrid& grid = registry.Grid(grid_name);
     const Image image = Image::Open(args->scan);
-    ReseauDetectorOptions options;
-    options.pixel_size_um = ResolvePixelSizeUm(image.info(), args->pixel_size_um);
+    const double pixel_size_um = ResolvePixelSizeUm(image.info(), args->pixel_size_um);
+    std::optional<ScanOrientation> orientation;
     if (!args->orientation.empty()) {
-      ScanOrientation orientation;
-      if (!ParseScanOrientation(args->orientation, &orientation)) {
+      ScanOrientation parsed;
+      if (!ParseScanOrientation(args->orientation, &parsed)) {
         throw Error("--orientation", "'" + args->orientation + "' is not one of 0 90 180 270 0m 90m 180m 270m");
       }
-      options.orientation = orientation;
+      orientation = parsed;
     }
-    const ReseauDetection detection = DetectReseau(image, grid, options);
-    if (!detection.found) throw Error(args->scan, detection.summary);
-    if (detection.orientation_ambiguous && !args->allow_ambiguous) {
-      throw Error(args->scan, "cannot tell the scan's orientation (" + detection.orientation_evidence +
-                                  "); give --orientation");
+    auto check_orientation = [&](bool ambiguous, const std::string& evidence) {
+      if (ambiguous && !args->allow_ambiguous) {
+        throw Error(args->scan, "cannot tell the scan's orientation (" + evidence + "); give --orientation");
+      }
+    };
+
+    Detections detections;
+    if (!grid_name.empty()) {
+      ReseauDetectorOptions options;
+      options.pixel_size_um = pixel_size_um;
+      options.orientation = orientation;
+      detections.reseau = DetectReseau(image, registry.Grid(grid_name), options);
+      if (!detections.reseau->found) throw Error(args->scan, detections.reseau->summary);
+      check_orientation(detections.reseau->orientation_ambiguous, detections.reseau->orientation_evidence);
+      detections.orientation = detections.reseau->orientation;
+      detections.polarity = detections.reseau->polarity;
+    }
+    if (has_fiducials) {
+      // With a reseau the fiducials are predicted from it; without one they are searched for.
+      FiducialDetectorOptions options;
+      options.pixel_size_um = pixel_size_um;
+      options.orientation = orientation;
+      const FiducialSet* set = camera->fiducial_set.empty() ? nullptr : &registry.Fiducials(camera->fiducial_set);
+      const PlateToPixel* prior = detections.reseau ? &detections.reseau->plate_to_pixel : nullptr;
+      detections.fiducials = DetectFiducialMarks(image, *camera, set, prior, options);
+      if (!prior) {
+        if (!detections.fiducials->found) throw Error(args->scan, detections.fiducials->summary);
+        check_orientation(detections.fiducials->orientation_ambiguous, detections.fiducials->orientation_evidence);
+        detections.orientation = detections.fiducials->orientation;
+      }
     }
     std::filesystem::create_directories(args->out_dir);
     const std::string stem = std::filesystem::path(args->scan).stem().string();
     const std::string measurements = (std::filesystem::path(args->out_dir) / (stem + ".measurements.csv")).string();
     const std::string summary = (std::filesystem::path(args->out_dir) / (stem + ".detect.json")).string();
-    WriteMeasurementFile(measurements,
-                         ToMeasurementFile(detection, args->scan, args->camera.empty() ? "" : args->camera,
-                                           options.pixel_size_um));
-    WriteFileAtomically(summary, SummaryJson(detection, args->scan, grid_name).dump(2) + "\n");
-    std::cout << detection.summary << "\n" << measurements << "\n" << summary << "\n";
+    WriteMeasurementFile(measurements, ToMeasurementFile(detections, args->scan, args->camera, pixel_size_um));
+    WriteFileAtomically(summary, SummaryJson(detections, args->scan, grid_name).dump(2) + "\n");
+    if (detections.reseau) std::cout << "reseau: " << detections.reseau->summary << "\n";
+    if (detections.fiducials) std::cout << "fiducials: " << detections.fiducials->summary << "\n";
+    std::cout << measurements << "\n" << summary << "\n";
   });
 }
 

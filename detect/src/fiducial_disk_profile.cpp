@@ -9,8 +9,8 @@
 namespace platemeter::internal {
 namespace {
 
-constexpr double kTailSigmas = 10.0;  // exp(-50) beyond: nothing left
-constexpr int kStepsPerSigma = 16;
+constexpr double kTailSigmas = 8.5;  // exp(-36) beyond: nothing left
+constexpr int kStepsPerSigma = 8;  // cubic Hermite: error ~ (1/8)^4 / 384 of the profile
 
 // 8-node Gauss-Legendre on [-1, 1].
 constexpr double kNodes[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290, -0.1834346424956498,
@@ -74,7 +74,9 @@ DiskProfileValue DiskProfileTable::At(double r) const {
   const double t = s - static_cast<double>(i), t2 = t * t, t3 = t2 * t;
   v.value = (2 * t3 - 3 * t2 + 1) * value_[i] + (t3 - 2 * t2 + t) * step_ * d_r_[i] + (-2 * t3 + 3 * t2) * value_[i + 1] +
             (t3 - t2) * step_ * d_r_[i + 1];
-  v.d_r = (1 - t) * d_r_[i] + t * d_r_[i + 1];
+  // The interpolant's own slope, so that value and position derivative agree (clean convergence).
+  v.d_r = ((6 * t2 - 6 * t) * (value_[i] - value_[i + 1])) / step_ + (3 * t2 - 4 * t + 1) * d_r_[i] +
+          (3 * t2 - 2 * t) * d_r_[i + 1];
   v.d_radius = (1 - t) * d_radius_[i] + t * d_radius_[i + 1];
   v.d_sigma = (1 - t) * d_sigma_[i] + t * d_sigma_[i + 1];
   return v;

@@ -44,7 +44,7 @@ struct PixelRule {
 };
 
 int CellsForBlur(double sigma_px) {
-  return static_cast<int>(std::clamp(std::ceil(1.0 / (1.5 * sigma_px) - 1e-9), 1.0, 12.0));
+  return static_cast<int>(std::clamp(std::ceil(1.0 / (2.5 * sigma_px) - 1e-9), 1.0, 12.0));
 }
 
 // Adds sign * (pixel mean of the blurred disk) and its derivatives (x0, y0, radius, sigma).
@@ -135,6 +135,16 @@ class RingModel : public internal::MarkShapeModel {
   }
 };
 
+// The bar profile, exactly 1 or 0 (no derivatives) where the pixel and 7 blur
+// sigmas lie wholly inside or outside the bar (error below 1e-11): most
+// pixels of a long arm are far from the arm's ends.
+BarProfile FastBarProfile(double t, double width, double sigma) {
+  const double reach = 0.5 + 7.0 * sigma, a = std::abs(t);
+  if (a <= 0.5 * width - reach) return {1.0, 0.0, 0.0, 0.0};
+  if (a >= 0.5 * width + reach) return {};
+  return EvaluateBarProfile(t, width, sigma);
+}
+
 // Corner: x0, y0, theta, w1, w2, sigma; arm length and handedness fixed.
 class CornerModel : public internal::MarkShapeModel {
  public:
@@ -149,10 +159,10 @@ class CornerModel : public internal::MarkShapeModel {
       const double pp = c * dx + sn * dy;            // along arm 1
       const double qq = chi_ * (-sn * dx + c * dy);  // along arm 2
       // arm 1: q in [-w1/2, w1/2], p in [-w2/2, len]; arm 2: p in [-w2/2, w2/2], q in [-w1/2, len].
-      const BarProfile q1 = EvaluateBarProfile(qq, w1, s);
-      const BarProfile p1 = EvaluateBarProfile(pp - 0.5 * (len - 0.5 * w2), len + 0.5 * w2, s);
-      const BarProfile p2 = EvaluateBarProfile(pp, w2, s);
-      const BarProfile q2 = EvaluateBarProfile(qq - 0.5 * (len - 0.5 * w1), len + 0.5 * w1, s);
+      const BarProfile q1 = FastBarProfile(qq, w1, s);
+      const BarProfile p1 = FastBarProfile(pp - 0.5 * (len - 0.5 * w2), len + 0.5 * w2, s);
+      const BarProfile p2 = FastBarProfile(pp, w2, s);
+      const BarProfile q2 = FastBarProfile(qq - 0.5 * (len - 0.5 * w1), len + 0.5 * w1, s);
       values[i] = q1.value * p1.value + p2.value * q2.value - p2.value * q1.value;
       if (!derivatives) continue;
       const double ds_dp = q1.value * p1.d_t + p2.d_t * q2.value - p2.d_t * q1.value;
@@ -177,7 +187,7 @@ class CornerModel : public internal::MarkShapeModel {
 };
 
 double DiskUncertaintyPx(const MarkFitStart& start) { return 0.25 * start.size_px + 1.0; }
-double CornerUncertaintyPx(const MarkFitStart& start) { return 2.0 * start.line_width_px + 2.0; }
+double CornerUncertaintyPx(const MarkFitStart& start) { return 0.5 * start.line_width_px + 2.0; }
 
 double DiskSampleRadius(const MarkFitStart& start, const MarkFitOptions& options) {
   return 0.5 * start.size_px + 4.0 * std::max(start.blur_sigma_px, 0.5) + options.margin_px + DiskUncertaintyPx(start);
@@ -347,7 +357,11 @@ MarkFitResult FitMark(const ImageWindow& window, const MarkFitStart& start, cons
     settings.lower = {cx - shift, cy - shift, start.rotation_rad - 0.1, 0.2 * w, 0.2 * w, options.min_blur_sigma_px};
     settings.upper = {cx + shift, cy + shift, start.rotation_rad + 0.1, 3.0 * w + 1.0, 3.0 * w + 1.0,
                       std::max(blur_start, blur_cap)};
+    if (!options.fit_corner_rotation) {  // held at the start's (known) rotation
+      settings.held = {2};
+    }
     model = std::make_unique<CornerModel>(size, start.corner_handedness);
+    if (options.quadratic_corner_background) settings.background_terms = 6;
   }
 
   const internal::MarkEngineResult fit = internal::RunMarkFit(*model, std::move(samples), settings);

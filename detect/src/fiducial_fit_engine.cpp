@@ -13,8 +13,9 @@ namespace {
 // Full parameter vector: x0, y0, shape..., gain, b0, bx, by.
 class MarkCost : public ceres::CostFunction {
  public:
-  MarkCost(const MarkShapeModel& model, const std::vector<MarkSample>* samples, double xc, double yc)
-      : model_(model), samples_(samples), xc_(xc), yc_(yc), n_(model.num_shape() + 6) {
+  MarkCost(const MarkShapeModel& model, const std::vector<MarkSample>* samples, double xc, double yc, int background_terms)
+      : model_(model), samples_(samples), xc_(xc), yc_(yc), nb_(background_terms),
+        n_(model.num_shape() + 3 + background_terms) {
     set_num_residuals(static_cast<int>(samples->size()));
     mutable_parameter_block_sizes()->push_back(n_);
   }
@@ -22,24 +23,27 @@ class MarkCost : public ceres::CostFunction {
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
     const double* p = parameters[0];
     const size_t count = samples_->size();
-    const int ns = n_ - 4;  // x0, y0, shape
+    const int ns = n_ - 1 - nb_;  // x0, y0, shape
     const bool want = jacobians && jacobians[0];
     values_.resize(count);
     if (want) derivatives_.resize(count * ns);
     model_.Evaluate(p, *samples_, values_.data(), want ? derivatives_.data() : nullptr);
-    const double gain = p[ns], b0 = p[ns + 1], bx = p[ns + 2], by = p[ns + 3];
+    const double gain = p[ns];
+    const double* b = p + ns + 1;
     for (size_t i = 0; i < count; ++i) {
       const MarkSample& s = (*samples_)[i];
-      const double dx = s.x_px - xc_, dy = s.y_px - yc_;
-      residuals[i] = b0 + bx * dx + by * dy + gain * values_[i] - s.value_dn;
+      // Background terms in units of 100 px keep the normal matrix well scaled.
+      const double dx = 0.01 * (s.x_px - xc_), dy = 0.01 * (s.y_px - yc_);
+      const double terms[6] = {1.0, dx, dy, dx * dx, dx * dy, dy * dy};
+      double background = 0.0;
+      for (int k = 0; k < nb_; ++k) background += b[k] * terms[k];
+      residuals[i] = background + gain * values_[i] - s.value_dn;
       if (!std::isfinite(residuals[i])) return false;
       if (want) {
         double* row = jacobians[0] + i * n_;
         for (int k = 0; k < ns; ++k) row[k] = gain * derivatives_[i * ns + k];
         row[ns] = values_[i];
-        row[ns + 1] = 1.0;
-        row[ns + 2] = dx;
-        row[ns + 3] = dy;
+        for (int k = 0; k < nb_; ++k) row[ns + 1 + k] = terms[k];
       }
     }
     return true;
@@ -67,6 +71,7 @@ class MarkCost : public ceres::CostFunction {
   const MarkShapeModel& model_;
   const std::vector<MarkSample>* samples_;
   double xc_, yc_;
+  int nb_;
   int n_;
   mutable std::vector<double> values_, derivatives_, row_major_;
 };
@@ -82,22 +87,25 @@ bool Solve(const MarkShapeModel& model, const std::vector<MarkSample>& samples, 
            const MarkEngineSettings& settings, bool shape_fixed, std::vector<double>* p, std::string* message) {
   const int ns = model.num_shape() + 2;
   ceres::Problem problem;
-  problem.AddResidualBlock(new MarkCost(model, &samples, xc, yc), nullptr, p->data());
+  problem.AddResidualBlock(new MarkCost(model, &samples, xc, yc, settings.background_terms), nullptr, p->data());
+  auto is_held = [&](int k) { return std::find(settings.held.begin(), settings.held.end(), k) != settings.held.end(); };
   for (int k = 0; k < ns; ++k) {
-    if (k >= 2 && shape_fixed) continue;
+    if (k >= 2 && (shape_fixed || is_held(k))) continue;
     problem.SetParameterLowerBound(p->data(), k, settings.lower[k]);
     problem.SetParameterUpperBound(p->data(), k, settings.upper[k]);
   }
-  if (shape_fixed && model.num_shape() > 0) {
-    std::vector<int> held;
-    for (int k = 2; k < ns; ++k) held.push_back(k);
+  std::vector<int> held;
+  for (int k = 2; k < ns; ++k)
+    if (shape_fixed || is_held(k)) held.push_back(k);
+  if (!held.empty()) {
     problem.SetManifold(p->data(), new ceres::SubsetManifold(static_cast<int>(p->size()), held));
   }
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  solver.max_num_iterations = settings.max_iterations;
-  solver.function_tolerance = 1e-12;
-  solver.parameter_tolerance = 1e-12;
+  // The shape-held pass only brings the position near; the full pass converges.
+  solver.max_num_iterations = shape_fixed ? std::min(settings.max_iterations, 8) : settings.max_iterations;
+  solver.function_tolerance = 1e-11;
+  solver.parameter_tolerance = 1e-11;
   solver.gradient_tolerance = 1e-14;
   solver.num_threads = 1;  // marks are fitted in parallel one level up
   ceres::Solver::Summary summary;
@@ -112,7 +120,7 @@ MarkEngineResult RunMarkFit(const MarkShapeModel& model, std::vector<MarkSample>
                             const MarkEngineSettings& settings) {
   MarkEngineResult result;
   const int ns = model.num_shape() + 2;
-  const int n = ns + 4;
+  const int n = ns + 1 + settings.background_terms;
   if (static_cast<int>(samples.size()) < 4 * n) {
     result.message = "too few pixels around the mark to fit it";
     return result;
@@ -152,7 +160,7 @@ MarkEngineResult RunMarkFit(const MarkShapeModel& model, std::vector<MarkSample>
   const size_t all_pixels = samples.size();
   std::vector<double> residuals;
   for (int round = 0; usable && round < 2; ++round) {
-    MarkCost cost(model, &samples, xc, yc);
+    MarkCost cost(model, &samples, xc, yc, settings.background_terms);
     cost.Full(p.data(), &residuals, nullptr);
     std::vector<double> abs_residuals(residuals.size());
     for (size_t i = 0; i < residuals.size(); ++i) abs_residuals[i] = std::abs(residuals[i]);
@@ -180,15 +188,20 @@ MarkEngineResult RunMarkFit(const MarkShapeModel& model, std::vector<MarkSample>
   // Formal covariance of the position: Schur complement on every other
   // parameter (pseudo-inverse after scaling to unit diagonal: width and blur of
   // a thin line are nearly interchangeable, which must not break the position's sigma).
-  MarkCost cost(model, &samples, xc, yc);
+  MarkCost cost(model, &samples, xc, yc, settings.background_terms);
   Eigen::MatrixXd jacobian;
   cost.Full(p.data(), &residuals, &jacobian);
   double rss = 0.0;
   for (double r : residuals) rss += r * r;
-  const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
-  const int dof = static_cast<int>(samples.size()) - n;
+  std::vector<int> free_columns;
+  for (int k = 0; k < n; ++k)
+    if (std::find(settings.held.begin(), settings.held.end(), k) == settings.held.end()) free_columns.push_back(k);
+  const Eigen::MatrixXd jacobian_free = jacobian(Eigen::all, free_columns);
+  const Eigen::MatrixXd normal = jacobian_free.transpose() * jacobian_free;
+  const int n_free = static_cast<int>(free_columns.size());
+  const int dof = static_cast<int>(samples.size()) - n_free;
   const double sigma0_sq = rss / std::max(dof, 1);
-  const int nn = n - 2;
+  const int nn = n_free - 2;
   const Eigen::Matrix2d npp = normal.topLeftCorner(2, 2);
   const Eigen::MatrixXd npn = normal.topRightCorner(2, nn);
   const Eigen::MatrixXd nnn = normal.bottomRightCorner(nn, nn);

@@ -11,7 +11,7 @@
 // D itself has no closed form: it is the integral of -dD/dr from far outside
 // (where D = 0), taken per table step with an 8-node Gauss-Legendre rule. The
 // table holds D and its derivatives on [r_lo, r_hi] (D = 1 inside r_lo when
-// R > 10 s, 0 beyond r_hi) and is read by cubic Hermite interpolation
+// R > 8.5 s, 0 beyond r_hi) and is read by cubic Hermite interpolation
 // (value) and linear interpolation (derivatives, which only steer the fit).
 #include <vector>
 

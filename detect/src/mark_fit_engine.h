@@ -1,7 +1,7 @@
 #pragma once
 // The least-squares machinery shared by the fiducial mark fits (dot, ring,
 // corner): a unit-gain shape S(pixel; x0, y0, shape...) on a planar background,
-//   I = b0 + bx (x - xc) + by (y - yc) + g * S,
+//   I = b0 + bx (x - xc) + by (y - yc) [+ quadratic terms] + g * S,
 // solved with Ceres (first with the shape held, then free), pixels that do not
 // belong to a clean mark dropped, and the formal covariance of (x0, y0) as the
 // Schur complement of the normal matrix on every other parameter, scaled by the
@@ -31,6 +31,8 @@ class MarkShapeModel {
 struct MarkEngineSettings {
   std::vector<double> start;         // x0, y0, shape...
   std::vector<double> lower, upper;  // bounds of the same parameters
+  int background_terms = 3;          // 3: plane; 6: quadratic (long windows over a varying background)
+  std::vector<int> held;             // shape parameters held at their start (known), not in the covariance
   double outlier_threshold = 4.0;
   double min_outlier_contrast = 0.05;
   int max_iterations = 50;
@@ -39,7 +41,7 @@ struct MarkEngineSettings {
 
 struct MarkEngineResult {
   bool converged = false;
-  std::vector<double> params;  // x0, y0, shape..., then gain, b0, bx, by
+  std::vector<double> params;  // x0, y0, shape..., then gain, background terms (b0 first)
   double cov_xx = 0, cov_xy = 0, cov_yy = 0;  // formal, scaled by sigma0^2
   double sigma0_dn = 0.0;
   double outlier_fraction = 0.0;

@@ -2,12 +2,13 @@
 // Least-squares matching of a parametric fiducial mark on a scan's own pixels,
 // for every mark type of the definitions (grids/definitions.h MarkType):
 //   I(x, y) = b0 + bx (x - xc) + by (y - yc) + g * S(x, y)
+// (plus quadratic background terms for corners, whose long arms cross terrain)
 // with S the unit-contrast mark, blurred by an isotropic Gaussian of sigma s
 // and averaged over each pixel's area (pixel units throughout):
 // - dot: a disk of diameter D. Its blurred radial profile has no closed form;
 //   it is tabulated per parameter set by 1D quadrature of its closed-form
 //   radial derivative (Bessel functions) and averaged over the pixel square
-//   with a composite Gauss-Legendre rule (sub-cells no wider than 1.5 s).
+//   with a composite Gauss-Legendre rule (sub-cells no wider than 2.5 s).
 //   Shape parameters: D, s.
 // - ring: the disk of diameter D minus the concentric disk of diameter D - 2 w.
 //   Shape parameters: D, w, s.
@@ -39,6 +40,8 @@ struct MarkFitOptions {
   double min_outlier_contrast = 0.05;  // a pixel is never an outlier below this share of the contrast
   double max_outlier_fraction = 0.08;  // share of dropped pixels above which the caller should call it a defect
   double max_corner_arm_px = 200.0;    // px; corner arms are fitted this far from the corner point at most
+  bool quadratic_corner_background = true;  // corner arms are long: a quadratic background follows terrain under them
+  bool fit_corner_rotation = true;     // false: the corner's rotation is held at the start's (known from the layout)
   int max_iterations = 50;             // per solve
   bool Check(std::string* why) const;
 };

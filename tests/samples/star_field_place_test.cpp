@@ -10,6 +10,7 @@
 #include <erfa.h>
 #include <Eigen/Dense>
 
+#include "platemeter/grids/registry.h"
 #include "platemeter/samples/star_field.h"
 
 namespace platemeter::sim {
@@ -140,6 +141,37 @@ TEST(StarFieldPlace, PointingConvention) {
   EXPECT_NEAR(p->y_mm, 0.0, 1e-12);
   // Behind the camera: nothing.
   EXPECT_FALSE(lens.Project(m, -axis));
+}
+
+TEST(StarFieldPlace, OrbigonLensIsAppliedInSeed001sLeftHandedFrame) {
+  // Seed 001 Table 3 (combined) as printed, in its left-handed focal-plane
+  // frame: C, xp, yp, xs, ys (um), K1..K5, Phi_T. Seed 001's image equation
+  // (SlamaImageEquation, epsilon 0) in that frame on the mirrored direction
+  // (v -> -v), mirrored back (y -> -y), is the plate position.
+  const double c_mm = 80.17103, xp_mm = -0.02050, yp_mm = -0.00004;
+  const double slama[8] = {1.0636 - xp_mm, -1.1637 - yp_mm, 3.6494e-1, -1.1011e+2, 9.5244e+3, 7.8152e-4, 5.0665e-2,
+                           -271.2 * kDeg};
+  const DefinitionRegistry registry;
+  const CameraDefinition* orbigon = registry.FindCamera("orbigon");
+  ASSERT_NE(orbigon, nullptr);
+  const PlateLens lens(*orbigon);
+  EXPECT_TRUE(lens.printed_left_handed());
+  EXPECT_NEAR(lens.PrincipalPoint().y_mm, -yp_mm, 1e-12);
+  double worst_flip_um = 0.0;
+  for (const auto& [u, v] : {std::pair{0.3, 0.4}, std::pair{-0.5, 0.2}, std::pair{0.6, -0.6}, std::pair{-0.1, -0.55}}) {
+    const Eigen::Vector3d d(u, v, 1.0);
+    const std::optional<PlatePoint> p = lens.Project(Eigen::Matrix3d::Identity(), d);
+    ASSERT_TRUE(p);
+    double x, y;
+    SlamaImageEquation(slama, c_mm, c_mm, xp_mm, yp_mm, 0.0, d.x(), -d.y(), d.z(), &x, &y);
+    EXPECT_NEAR(p->x_mm, x, 1e-7) << u << ", " << v;
+    EXPECT_NEAR(p->y_mm, -y, 1e-7) << u << ", " << v;
+    // Without the flip the same numbers would put the image elsewhere by microns.
+    double xr, yr;
+    SlamaImageEquation(slama, c_mm, c_mm, xp_mm, yp_mm, 0.0, d.x(), d.y(), d.z(), &xr, &yr);
+    worst_flip_um = std::max(worst_flip_um, 1e3 * std::hypot(p->x_mm - xr, p->y_mm - yr));
+  }
+  EXPECT_GT(worst_flip_um, 1.0);
 }
 
 }  // namespace

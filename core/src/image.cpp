@@ -1,6 +1,7 @@
 #include "platemeter/core/image.h"
 
 #include <OpenImageIO/imagecache.h>
+#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <cmath>
@@ -44,6 +45,47 @@ void WarnOnce(const std::string& path, const std::string& message) {
   static std::set<std::string> warned;
   std::lock_guard<std::mutex> lock(mutex);
   if (warned.insert(path + "\n" + message).second) Warn(path + ": " + message);
+}
+
+// Native samples (channels per pixel: 1 or 3) to grayscale DN.
+template <typename Sample>
+void ToGrayDn(const Sample* samples, int channels, size_t count, float* values_dn) {
+  if (channels == 1) {
+    std::copy(samples, samples + count, values_dn);
+    return;
+  }
+  for (size_t i = 0; i < count; ++i) {
+    values_dn[i] = 0.2126f * static_cast<float>(samples[3 * i]) + 0.7152f * static_cast<float>(samples[3 * i + 1]) +
+                   0.0722f * static_cast<float>(samples[3 * i + 2]);
+  }
+}
+
+oiio::TypeDesc NativeType(SampleType type) {
+  switch (type) {
+    case SampleType::kUint8: return oiio::TypeDesc::UINT8;
+    case SampleType::kUint16: return oiio::TypeDesc::UINT16;
+    case SampleType::kFloat32: return oiio::TypeDesc::FLOAT;
+  }
+  return oiio::TypeDesc::FLOAT;
+}
+
+// Reads into a buffer of the native type with `read(type, buffer)` and converts.
+template <typename ReadFn>
+void ReadNativeAsGray(SampleType type, int channels, size_t count, float* values_dn, const ReadFn& read) {
+  const size_t samples = count * static_cast<size_t>(channels);
+  if (type == SampleType::kUint8) {
+    std::vector<uint8_t> raw(samples);
+    read(oiio::TypeDesc::UINT8, raw.data());
+    ToGrayDn(raw.data(), channels, count, values_dn);
+  } else if (type == SampleType::kUint16) {
+    std::vector<uint16_t> raw(samples);
+    read(oiio::TypeDesc::UINT16, raw.data());
+    ToGrayDn(raw.data(), channels, count, values_dn);
+  } else {
+    std::vector<float> raw(samples);
+    read(oiio::TypeDesc::FLOAT, raw.data());
+    ToGrayDn(raw.data(), channels, count, values_dn);
+  }
 }
 
 std::optional<double> ResolutionToUm(const oiio::ImageSpec& spec, const char* tag) {
@@ -201,37 +243,47 @@ void Image::ReadWindowInto(const PixelRect& rect, float* values_dn) const {
   const size_t count = static_cast<size_t>(rect.width_px) * static_cast<size_t>(rect.height_px);
   const int x0 = static_cast<int>(rect.x0_px), x1 = static_cast<int>(rect.x_end_px());
   const int y0 = static_cast<int>(rect.y0_px), y1 = static_cast<int>(rect.y_end_px());
-  // Gray (+ alpha): the first channel; colour: the first three.
+  // Gray (+ alpha): the first channel; colour: the first three. Integer scans
+  // are read in their own type so DN come back exact (a detour through OIIO's
+  // [0, 1] floats would give 99.99999 for 100).
   const int channels = info_.channels <= 2 ? 1 : 3;
-  // Integer scans are read in their own type so DN come back exact (a detour
-  // through OIIO's [0, 1] floats would give 99.99999 for 100).
-  std::vector<float> samples;
-  float* target = values_dn;
-  if (channels > 1) {
-    samples.resize(count * static_cast<size_t>(channels));
-    target = samples.data();
-  }
-  auto read = [&](oiio::TypeDesc type, void* buffer) {
+  ReadNativeAsGray(info_.sample_type, channels, count, values_dn, [&](oiio::TypeDesc type, void* buffer) {
     if (!Cache()->get_pixels(name, 0, 0, x0, x1, y0, y1, 0, 1, 0, channels, type, buffer)) {
       throw Error(info_.path, "cannot read pixels (" + CacheError() + ")");
     }
-  };
-  const size_t sample_count = count * static_cast<size_t>(channels);
-  if (info_.sample_type == SampleType::kUint8) {
-    std::vector<uint8_t> raw(sample_count);
-    read(oiio::TypeDesc::UINT8, raw.data());
-    std::copy(raw.begin(), raw.end(), target);
-  } else if (info_.sample_type == SampleType::kUint16) {
-    std::vector<uint16_t> raw(sample_count);
-    read(oiio::TypeDesc::UINT16, raw.data());
-    std::copy(raw.begin(), raw.end(), target);
-  } else {
-    read(oiio::TypeDesc::FLOAT, target);
+  });
+}
+
+void Image::ReadRowsDirect(long y0_px, long rows, float* values_dn) const {
+  if (rows <= 0 || y0_px < 0 || y0_px + rows > info_.height_px) {
+    throw Error(info_.path, "rows " + std::to_string(y0_px) + "+" + std::to_string(rows) + " lie outside the image");
   }
-  if (channels == 3) {
-    for (size_t i = 0; i < count; ++i) {
-      values_dn[i] = 0.2126f * samples[3 * i] + 0.7152f * samples[3 * i + 1] + 0.0722f * samples[3 * i + 2];
-    }
+  auto input = oiio::ImageInput::open(info_.path);
+  if (!input) throw Error(info_.path, "cannot open for reading (" + OneLine(oiio::geterror()) + ")");
+  const int channels = info_.channels <= 2 ? 1 : 3;
+  const long width = info_.width_px;
+  // Tiled files are read by whole tile rows, then cropped to the rows asked for.
+  const long tile_h = info_.tiled ? info_.tile_height_px : 1;
+  const long read_y0 = y0_px / tile_h * tile_h;
+  const long read_y1 = std::min(info_.height_px, (y0_px + rows + tile_h - 1) / tile_h * tile_h);
+  const size_t read_count = static_cast<size_t>(width) * static_cast<size_t>(read_y1 - read_y0);
+  std::vector<float> gray;
+  float* target = values_dn;
+  if (read_y0 != y0_px || read_y1 != y0_px + rows) {
+    gray.resize(read_count);
+    target = gray.data();
+  }
+  const oiio::ImageSpec& spec = input->spec();
+  ReadNativeAsGray(info_.sample_type, channels, read_count, target, [&](oiio::TypeDesc type, void* buffer) {
+    const bool ok = info_.tiled
+                        ? input->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + static_cast<int>(read_y0),
+                                            spec.y + static_cast<int>(read_y1), 0, 1, 0, channels, type, buffer)
+                        : input->read_scanlines(0, 0, spec.y + static_cast<int>(read_y0),
+                                                spec.y + static_cast<int>(read_y1), 0, 0, channels, type, buffer);
+    if (!ok) throw Error(info_.path, "cannot read pixels (" + OneLine(input->geterror()) + ")");
+  });
+  if (target != values_dn) {
+    std::copy(gray.begin() + (y0_px - read_y0) * width, gray.begin() + (y0_px - read_y0 + rows) * width, values_dn);
   }
 }
 

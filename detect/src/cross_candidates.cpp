@@ -18,7 +18,10 @@ bool CrossCandidateOptions::Check(std::string* why) const {
 int OverviewFactorFor(double line_width_px, long scan_long_side_px, double target_line_px, long max_overview_px) {
   const int by_line = std::max(1, static_cast<int>(std::floor(line_width_px / target_line_px)));
   const int by_memory = static_cast<int>((scan_long_side_px + max_overview_px - 1) / max_overview_px);
-  return std::max(by_line, by_memory);
+  // A power of two, so overview blocks align with power-of-two tiles (overview.cpp).
+  int factor = 1;
+  while (factor < std::max(by_line, by_memory)) factor *= 2;
+  return factor;
 }
 
 std::vector<CrossCandidate> FindCrossCandidates(const Overview& overview, const CrossCandidateOptions& options) {

@@ -17,20 +17,25 @@ Overview BuildOverview(const Image& image, int factor) {
   if (overview.width_px < 1 || overview.height_px < 1) throw Error(image.info().path, "scan smaller than one overview block");
   overview.values_dn.assign(static_cast<size_t>(overview.width_px * overview.height_px), 0.0f);
   const long scan_width = overview.width_px * factor;
-  // Bands of whole block rows, read and reduced independently.
-  const long rows_per_band = std::max(1L, 64L / factor);
-  const long bands = (overview.height_px + rows_per_band - 1) / rows_per_band;
-  tbb::parallel_for(0L, bands, [&](long band) {
-    const long oy0 = band * rows_per_band;
-    const long oy1 = std::min(overview.height_px, oy0 + rows_per_band);
-    std::vector<float> pixels(static_cast<size_t>(scan_width * factor));
+  const long image_width = image.info().width_px;
+  // Tasks of whole tile rows (and whole blocks), read through private readers
+  // so that the tiles are decoded in parallel; each task decodes its tiles once.
+  const long alignment = image.rows_alignment_px();
+  long task_rows = std::max<long>(alignment, 64);
+  while (task_rows % factor != 0 || task_rows % alignment != 0) task_rows += alignment;
+  const long blocks_per_task = task_rows / factor;
+  const long tasks = (overview.height_px + blocks_per_task - 1) / blocks_per_task;
+  tbb::parallel_for(0L, tasks, [&](long task) {
+    const long oy0 = task * blocks_per_task;
+    const long oy1 = std::min(overview.height_px, oy0 + blocks_per_task);
+    std::vector<float> pixels(static_cast<size_t>(image_width * (oy1 - oy0) * factor));
+    image.ReadRowsDirect(oy0 * factor, (oy1 - oy0) * factor, pixels.data());
     std::vector<double> sums(static_cast<size_t>(overview.width_px));
     const double norm = 1.0 / (static_cast<double>(factor) * factor);
     for (long oy = oy0; oy < oy1; ++oy) {
-      image.ReadWindowInto({0, oy * factor, scan_width, factor}, pixels.data());
       std::fill(sums.begin(), sums.end(), 0.0);
       for (long r = 0; r < factor; ++r) {
-        const float* row = pixels.data() + r * scan_width;
+        const float* row = pixels.data() + ((oy - oy0) * factor + r) * image_width;
         for (long x = 0; x < scan_width; ++x) sums[static_cast<size_t>(x / factor)] += row[x];
       }
       float* out = overview.values_dn.data() + oy * overview.width_px;

@@ -165,7 +165,9 @@ TEST_P(Noisy, ScatterMatchesFormalSigmaAndCramerRao) {
   EXPECT_LT(rms / sigma, 1.25);
   // The bound knows the mark's shape and rotation; a corner whose rotation is
   // fitted too loses more than that (its arms' offset and slope correlate).
-  if (c.shape != sim::MarkShapeKind::kCorner || c.hold_rotation) EXPECT_LT(rms / crb, 1.25);
+  if (c.shape != sim::MarkShapeKind::kCorner || c.hold_rotation) {
+    EXPECT_LT(rms / crb, 1.25);
+  }
   // Bias: the mean error over 50 trials is within 3 standard errors.
   EXPECT_LT(std::abs(sum_x / trials), 3.0 * rms / std::sqrt(trials));
   EXPECT_LT(std::abs(sum_y / trials), 3.0 * rms / std::sqrt(trials));

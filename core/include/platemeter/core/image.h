@@ -68,6 +68,15 @@ class Image {
   ImageWindow ReadWindow(const PixelRect& rect) const;
   void ReadWindowInto(const PixelRect& rect, float* values_dn) const;
 
+  // Reads whole rows [y0_px, y0_px + rows) through a private reader, bypassing
+  // the cache: for streaming passes that touch every pixel once. OpenImageIO's
+  // cache decodes one file's tiles one at a time; private readers on separate
+  // threads decode in parallel. Rows are best aligned to rows_alignment_px()
+  // (each call decodes the tile rows it touches).
+  void ReadRowsDirect(long y0_px, long rows, float* values_dn) const;
+  // The tile height of a tiled file, else 1.
+  long rows_alignment_px() const { return info_.tiled ? info_.tile_height_px : 1; }
+
  private:
   ImageInfo info_;
 };

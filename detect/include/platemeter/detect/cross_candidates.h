@@ -27,7 +27,7 @@ std::vector<CrossCandidate> FindCrossCandidates(const Overview& overview, const 
 
 // The overview factor that keeps a line of this width about `target_line_px`
 // wide, raised if needed so the overview's long side stays within max_overview_px
-// (its memory: 4 bytes a pixel).
+// (its memory: 4 bytes a pixel); a power of two.
 int OverviewFactorFor(double line_width_px, long scan_long_side_px, double target_line_px = 1.5,
                       long max_overview_px = 4096);
 

@@ -72,6 +72,14 @@ TEST_P(ImageLayouts, ReadsBackWhatWasWritten) {
   const ImageWindow part = image.ReadWindow({61, 47, 130, 90});
   for (long row = 47; row < 137; ++row)
     for (long col = 61; col < 191; ++col) ASSERT_EQ(part.at(col, row), all.at(col, row));
+  // Direct row reads (no cache), not aligned to tiles, and up to the last row.
+  for (const auto& [y0, rows] : {std::pair<long, long>{37, 61}, {0, height}, {height - 5, 5}}) {
+    std::vector<float> direct(static_cast<size_t>(width * rows));
+    image.ReadRowsDirect(y0, rows, direct.data());
+    for (long row = y0; row < y0 + rows; ++row)
+      for (long col = 0; col < width; ++col)
+        ASSERT_EQ(direct[static_cast<size_t>((row - y0) * width + col)], all.at(col, row)) << col << "," << row;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -206,6 +206,8 @@ struct ToolRun {
 // Runs a program as its own process, so its time and peak RSS are its own.
 ToolRun RunProcess(const std::vector<std::string>& args, const std::string& log) {
   ToolRun run;
+  std::fflush(stdout);  // or the child would write our buffered lines again
+  std::fflush(stderr);
   const auto start = std::chrono::steady_clock::now();
   const pid_t child = fork();
   if (child == 0) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <ostream>
 #include <vector>
 
 #include "platemeter/core/error.h"
@@ -40,6 +41,9 @@ struct Layout {
   std::string compression;
   bool bigtiff;
 };
+
+// Short parameter text (test names in ctest carry it).
+void PrintTo(const Layout& layout, std::ostream* os) { *os << layout.name; }
 
 class ImageLayouts : public ::testing::TestWithParam<Layout> {};
 

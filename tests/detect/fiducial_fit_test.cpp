@@ -4,6 +4,9 @@
 // scatter under noise against the formal sigma and the simulator's Cramer-Rao bound.
 #include <gtest/gtest.h>
 
+#include <ostream>
+#include <string>
+
 #include <cmath>
 #include <random>
 #include <vector>
@@ -28,6 +31,19 @@ struct Case {
   double amplitude_dn;
   bool hold_rotation = false;  // corner: rotation known (held at the truth)
 };
+
+// Readable test names and parameter text (gtest would print the parameter's bytes).
+const char* ShapeName(const Case& c) {
+  return c.shape == sim::MarkShapeKind::kDot      ? "dot"
+         : c.shape == sim::MarkShapeKind::kRing   ? "ring"
+         : c.shape == sim::MarkShapeKind::kCorner ? "corner"
+                                                  : "mark";
+}
+std::string CaseName(const ::testing::TestParamInfo<Case>& info) {
+  return std::string(ShapeName(info.param)) + std::to_string(info.index) +
+         (info.param.hold_rotation ? "_rotation_held" : "");
+}
+void PrintTo(const Case& c, std::ostream* os) { *os << ShapeName(c); }
 
 sim::SceneMark MakeMark(const Case& c, PixelPoint centre) {
   sim::SceneMark m;
@@ -118,7 +134,8 @@ TEST_P(NoiseFree, RecoversSimulatorMarksAtSubPixelOffsets) {
   EXPECT_LT(max_error, 0.005);
 }
 
-INSTANTIATE_TEST_SUITE_P(Marks, NoiseFree, ::testing::Values(kDot, kRing, kCornerUL, kCornerRotated, kSmallDot));
+INSTANTIATE_TEST_SUITE_P(Marks, NoiseFree, ::testing::Values(kDot, kRing, kCornerUL, kCornerRotated, kSmallDot),
+                         CaseName);
 
 class Noisy : public ::testing::TestWithParam<Case> {};
 
@@ -173,7 +190,7 @@ TEST_P(Noisy, ScatterMatchesFormalSigmaAndCramerRao) {
   EXPECT_LT(std::abs(sum_y / trials), 3.0 * rms / std::sqrt(trials));
 }
 
-INSTANTIATE_TEST_SUITE_P(Marks, Noisy, ::testing::Values(kDot, kRing, kCornerHeld, kCornerRotated));
+INSTANTIATE_TEST_SUITE_P(Marks, Noisy, ::testing::Values(kDot, kRing, kCornerHeld, kCornerRotated), CaseName);
 
 // A dot far from its start is still found (the start may be off by D/4).
 TEST(FiducialFit, DotFromRoughStart) {

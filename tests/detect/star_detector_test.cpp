@@ -1,0 +1,243 @@
+// Star detection on simulator plates: isolated stars against the Cramer-Rao
+// bound, close pairs, saturated stars, and dark reseau crosses and dust that
+// must not come out as stars. Truth and bounds come from the simulator.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "platemeter/core/error.h"
+#include "platemeter/detect/star_detector.h"
+#include "platemeter/grids/registry.h"
+#include "platemeter/samples/render_crb.h"
+#include "platemeter/samples/simulate.h"
+#include "platemeter/samples/spec.h"
+#include "support/test_support.h"
+
+namespace platemeter {
+namespace {
+
+using testing::TempDir;
+
+struct Rendered {
+  sim::SimulatedPlate plate;
+  std::string image_path;
+  std::vector<sim::MarkCramerRao> crb;  // per scene mark
+};
+
+Rendered Render(const std::string& toml, const TempDir& dir) {
+  const DefinitionRegistry registry;
+  Rendered r;
+  r.plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(toml, "star test spec"), registry);
+  r.crb = sim::CramerRaoBounds(r.plate.scene);
+  r.image_path = sim::WriteSimulatedPlate(r.plate, dir.path().string()).image_path;
+  return r;
+}
+
+// 20 um pixels on the 24 mm SN-004 stellar format (about 1400 px); stars of
+// sigma sqrt(17^2 + 10^2) um = 0.99 px (FWHM 2.32 px). Dark reseau crosses
+// (20 px arms, 0.75 px lines) of the same polarity as the stars.
+std::string Spec(const std::string& stars, const std::string& extra = "") {
+  return R"(
+name = "stars"
+camera = "sn004-stellar"
+seed = 5
+[output]
+pixel_size_um = 20.0
+margin_mm = 1.0
+bits = 16
+[marks.reseau]
+polarity = "dark"
+contrast_dn = 12000.0
+[stars]
+reference_magnitude = 6.0
+reference_peak_dn = 40000.0
+fwhm_um = 40.0
+polarity = "dark"
+)" + stars + R"(
+[background]
+level_dn = 50000.0
+[noise]
+blur_sigma_um = 10.0
+sensor_sigma_dn = 20.0
+)" + extra;
+}
+
+StarDetectorOptions Options() {
+  StarDetectorOptions o;
+  o.psf_fwhm_px = 2.32;
+  o.band_rows = 256;  // several bands on this image
+  return o;
+}
+
+const DetectedStar* Nearest(const std::vector<DetectedStar>& stars, double x, double y, double radius) {
+  const DetectedStar* best = nullptr;
+  double d_best = radius;
+  for (const DetectedStar& s : stars) {
+    const double d = std::hypot(s.point.position_px.x_px - x, s.point.position_px.y_px - y);
+    if (d < d_best) d_best = d, best = &s;
+  }
+  return best;
+}
+
+TEST(StarDetectorTest, IsolatedBrightStarsReachTheCramerRaoBound) {
+  const TempDir dir;
+  // Magnitudes 6.5..8: peaks 25000..6300 DN, SNR about 1700..400.
+  const Rendered r = Render(Spec("count = 300\nmagnitude_min = 6.5\nmagnitude_max = 8.0"), dir);
+  const Image image = Image::Open(r.image_path);
+  const std::vector<DetectedStar> stars = DetectStars(image, Options());
+  double sum_ratio2 = 0;
+  int n = 0, found = 0, isolated = 0;
+  for (size_t i = 0; i < r.plate.truth.size(); ++i) {
+    const MeasuredPoint& t = r.plate.truth[i];
+    if (t.kind != PointKind::kStar || !t.x_px || r.plate.truth_mark[i] < 0) continue;
+    if (*t.x_px < 10 || *t.y_px < 10 || *t.x_px > image.info().width_px - 10 || *t.y_px > image.info().height_px - 10) continue;
+    // Isolated: no other star or reseau cross within 25 px.
+    bool crowded = false;
+    for (const MeasuredPoint& u : r.plate.truth)
+      if (&u != &t && u.x_px && std::hypot(*u.x_px - *t.x_px, *u.y_px - *t.y_px) < 25) crowded = true;
+    if (crowded) continue;
+    ++isolated;
+    const DetectedStar* d = Nearest(stars, *t.x_px, *t.y_px, 1.5);
+    if (!d || d->point.status != PointStatus::kMeasured) continue;
+    ++found;
+    const sim::MarkCramerRao& crb = r.crb[r.plate.truth_mark[i]];
+    const double ex = d->point.position_px.x_px - *t.x_px, ey = d->point.position_px.y_px - *t.y_px;
+    sum_ratio2 += ex * ex / (crb.sigma_x_px * crb.sigma_x_px) + ey * ey / (crb.sigma_y_px * crb.sigma_y_px);
+    n += 2;
+    EXPECT_EQ(d->flags & (kStarDefect | kStarBlended | kStarSaturated), 0u) << StarFlagNames(d->flags);
+    EXPECT_NEAR(d->fwhm_px, 2.32, 0.15);
+  }
+  ASSERT_GT(isolated, 150);
+  EXPECT_EQ(found, isolated);
+  const double rms_over_crb = std::sqrt(sum_ratio2 / n);
+  EXPECT_LT(rms_over_crb, 1.1) << "over " << n / 2 << " stars";
+  std::printf("isolated stars: %d, centroid RMS / CRB %.3f\n", n / 2, rms_over_crb);
+  EXPECT_GT(rms_over_crb, 0.8);  // a ratio far below 1 would mean the bound or the matching is wrong
+}
+
+// Pairs 3..6 px apart (explicit stars); every star of a pair found, flagged
+// blended, and no mean drift toward the neighbour.
+TEST(StarDetectorTest, ClosePairsBothFoundWithoutDrift) {
+  const TempDir dir;
+  std::string explicit_stars;
+  int k = 0;
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 8; ++j) {
+      const double x_mm = -9.0 + 2.4 * i + 0.37, y_mm = -9.0 + 2.4 * j + 0.61;  // between the reseau crosses
+      const double sep_px = 3.0 + 3.0 * ((i * 8 + j) % 7) / 6.0;
+      const double angle = 0.7 * (i * 8 + j);
+      const double dx = 0.5 * sep_px * 0.020 * std::cos(angle), dy = 0.5 * sep_px * 0.020 * std::sin(angle);
+      explicit_stars += "[[stars.star]]\nid = \"A" + std::to_string(k) + "\"\nx_mm = " + std::to_string(x_mm + dx) +
+                        "\ny_mm = " + std::to_string(y_mm + dy) + "\nmagnitude = 7.0\n";
+      explicit_stars += "[[stars.star]]\nid = \"B" + std::to_string(k) + "\"\nx_mm = " + std::to_string(x_mm - dx) +
+                        "\ny_mm = " + std::to_string(y_mm - dy) + "\nmagnitude = " + (k % 2 ? "7.5" : "7.0") + "\n";
+      ++k;
+    }
+  const Rendered r = Render(Spec(explicit_stars), dir);
+  const std::vector<DetectedStar> stars = DetectStars(Image::Open(r.image_path), Options());
+  int pairs = 0, both = 0;
+  double drift_sum = 0, drift2 = 0, crb2 = 0;
+  int m = 0;
+  for (int p = 0; p < k; ++p) {
+    const MeasuredPoint *a = nullptr, *b = nullptr;
+    size_t ia = 0, ib = 0;
+    for (size_t i = 0; i < r.plate.truth.size(); ++i) {
+      if (r.plate.truth[i].id == "A" + std::to_string(p)) a = &r.plate.truth[i], ia = i;
+      if (r.plate.truth[i].id == "B" + std::to_string(p)) b = &r.plate.truth[i], ib = i;
+    }
+    ASSERT_TRUE(a && b);
+    ++pairs;
+    const double sep = std::hypot(*a->x_px - *b->x_px, *a->y_px - *b->y_px);
+    const DetectedStar* da = Nearest(stars, *a->x_px, *a->y_px, 0.4 * sep);
+    const DetectedStar* db = Nearest(stars, *b->x_px, *b->y_px, 0.4 * sep);
+    if (!da || !db || da == db) {
+      const DetectedStar* n = Nearest(stars, 0.5 * (*a->x_px + *b->x_px), 0.5 * (*a->y_px + *b->y_px), 10);
+      ADD_FAILURE() << "pair " << p << " sep " << sep << " px: nearest detection "
+                    << (n ? StarFlagNames(n->flags) + " fwhm " + std::to_string(n->fwhm_px) : std::string("none"));
+      continue;
+    }
+    ++both;
+    EXPECT_TRUE(da->flags & kStarBlended);
+    // Error component along the line to the neighbour (positive: toward it).
+    for (auto [t, d, o, idx] : {std::tuple{a, da, b, ia}, std::tuple{b, db, a, ib}}) {
+      const double ux = (*o->x_px - *t->x_px) / sep, uy = (*o->y_px - *t->y_px) / sep;
+      const double e = (d->point.position_px.x_px - *t->x_px) * ux + (d->point.position_px.y_px - *t->y_px) * uy;
+      drift_sum += e, drift2 += e * e, ++m;
+      const sim::MarkCramerRao& c = r.crb[r.plate.truth_mark[idx]];
+      crb2 += 0.5 * (c.sigma_x_px * c.sigma_x_px + c.sigma_y_px * c.sigma_y_px);
+    }
+  }
+  EXPECT_EQ(both, pairs);
+  ASSERT_GT(m, 0);
+  const double mean_drift = drift_sum / m, rms = std::sqrt(drift2 / m), crb_rms = std::sqrt(crb2 / m);
+  // No drift: the mean is within 3 standard errors of 0 and below 0.05 px.
+  EXPECT_LT(std::abs(mean_drift), std::max(0.05, 3 * rms / std::sqrt(m))) << "rms " << rms;
+  // The isolated bound of one star; a joint fit loses information at 3 px, so allow 3 x.
+  EXPECT_LT(rms, 3.0 * crb_rms) << "crb " << crb_rms;
+}
+
+// Magnitude 3 stars (peak 16 x the background) are clipped at 0 DN: measured
+// from their wings, flagged saturated, within 0.1 px.
+TEST(StarDetectorTest, SaturatedStarsMeasuredFromTheWingsAndFlagged) {
+  const TempDir dir;
+  const Rendered r = Render(Spec("count = 40\nmagnitude_min = 2.5\nmagnitude_max = 3.5"), dir);
+  const std::vector<DetectedStar> stars = DetectStars(Image::Open(r.image_path), Options());
+  int checked = 0;
+  for (const MeasuredPoint& t : r.plate.truth) {
+    if (t.kind != PointKind::kStar || !t.x_px || *t.x_px < 10 || *t.y_px < 10 || *t.x_px > 1390 || *t.y_px > 1390) continue;
+    bool crowded = false;
+    for (const MeasuredPoint& u : r.plate.truth)
+      if (&u != &t && u.x_px && std::hypot(*u.x_px - *t.x_px, *u.y_px - *t.y_px) < 25) crowded = true;
+    if (crowded) continue;
+    ++checked;
+    const DetectedStar* d = Nearest(stars, *t.x_px, *t.y_px, 1.5);
+    ASSERT_NE(d, nullptr) << t.id;
+    EXPECT_EQ(d->point.status, PointStatus::kMeasured) << t.id;
+    EXPECT_TRUE(d->flags & kStarSaturated) << t.id;
+    EXPECT_LT(std::hypot(d->point.position_px.x_px - *t.x_px, d->point.position_px.y_px - *t.y_px), 0.1) << t.id;
+  }
+  EXPECT_GT(checked, 15);
+}
+
+// A plate with no stars: dark reseau crosses, dust and scratches give no
+// measured star (with and without the crosses' positions as a mask).
+TEST(StarDetectorTest, ReseauCrossesDustAndScratchesAreNotStars) {
+  const TempDir dir;
+  const Rendered r = Render(Spec("", R"(
+[defects]
+dust_count = 30
+dust_diameter_min_um = 120.0
+dust_diameter_max_um = 300.0
+dust_contrast_dn = 8000.0
+scratch_count = 5
+scratch_polarity = "dark"
+scratch_width_um = 20.0
+)"), dir);
+  const Image image = Image::Open(r.image_path);
+  StarDetectorOptions o = Options();
+  std::vector<DetectedStar> stars = DetectStars(image, o);
+  int crosses = 0;
+  for (const MeasuredPoint& t : r.plate.truth) crosses += t.kind == PointKind::kReseau;
+  ASSERT_GE(crosses, 25);  // the 5 x 5 Ikotar B grid
+  int measured = 0, defects = 0;
+  for (const DetectedStar& s : stars) (s.point.status == PointStatus::kMeasured ? measured : defects)++;
+  EXPECT_EQ(measured, 0);
+  EXPECT_GE(defects, crosses);  // every cross seen and rejected
+  for (const MeasuredPoint& t : r.plate.truth)
+    if (t.kind == PointKind::kReseau && t.x_px) o.mask_px.push_back({*t.x_px, *t.y_px});
+  stars = DetectStars(image, o);
+  measured = 0;
+  for (const DetectedStar& s : stars) measured += s.point.status == PointStatus::kMeasured;
+  EXPECT_EQ(measured, 0);
+}
+
+TEST(StarDetectorTest, InvalidOptionsThrow) {
+  StarDetectorOptions o;
+  o.psf_fwhm_px = 0.1;
+  std::vector<float> v(100, 1.f);
+  EXPECT_THROW(DetectStarsInBuffer(v.data(), 10, 10, 255, o), Error);
+}
+
+}  // namespace
+}  // namespace platemeter

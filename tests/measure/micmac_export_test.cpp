@@ -1,0 +1,64 @@
+// The MicMac MeasuresIm export parses as XML (xmllint, an independent parser)
+// with MicMac's element names and the points' pixel positions.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "platemeter/measure/micmac_export.h"
+#include "support/test_support.h"
+
+namespace platemeter {
+namespace {
+
+std::string Shell(const std::string& command) {
+  std::string out;
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
+  std::array<char, 256> buf{};
+  while (pipe && fgets(buf.data(), buf.size(), pipe.get())) out += buf.data();
+  return out;
+}
+
+TEST(MicMacExport, ParsesWithMicMacElementNames) {
+  MeasurementFile file;
+  file.header.scan_file = "/data/scans/plate <2325>.tif";
+  MeasuredPoint a;
+  a.id = "X1Y1";
+  a.x_px = 259.6176415015885;
+  a.y_px = 2760.0100148830065;
+  MeasuredPoint b = a;
+  b.id = "P&1";
+  b.kind = PointKind::kPasspoint;
+  b.x_px = 12.5;
+  b.y_px = 0.25;
+  MeasuredPoint missing;
+  missing.id = "X2Y1";
+  missing.status = PointStatus::kMissing;
+  MeasuredPoint rejected = a;
+  rejected.id = "X3Y1";
+  rejected.status = PointStatus::kRejected;
+  file.points = {a, b, missing, rejected};
+  testing::TempDir dir;
+  const std::string path = dir.file("m.xml");
+  WriteMicMacMeasures(path, file);
+  if (Shell("command -v xmllint").empty()) GTEST_SKIP() << "xmllint not installed";
+  const std::string root = "/SetOfMesureAppuisFlottants/MesureAppuiFlottant1Im";
+  auto xpath = [&](const std::string& expr) {
+    std::string out = Shell("xmllint --xpath '" + expr + "' " + path + " 2>&1");
+    if (!out.empty() && out.back() == '\n') out.pop_back();
+    return out;
+  };
+  EXPECT_EQ(xpath("string(" + root + "/NameIm)"), "plate <2325>.tif");
+  EXPECT_EQ(xpath("count(" + root + "/OneMesureAF1I)"), "2");  // measured only: not missing, not rejected
+  EXPECT_EQ(xpath("string(" + root + "/OneMesureAF1I[NamePt=\"X1Y1\"]/PtIm)"), "259.6176415015885 2760.0100148830065");
+  EXPECT_EQ(xpath("string(" + root + "/OneMesureAF1I[NamePt=\"P&1\"]/PtIm)"), "12.5 0.25");
+  // With rejected points included.
+  WriteMicMacMeasures(path, file, "scan.tif", {true});
+  EXPECT_EQ(xpath("count(" + root + "/OneMesureAF1I)"), "3");
+  EXPECT_EQ(xpath("string(" + root + "/NameIm)"), "scan.tif");
+}
+
+}  // namespace
+}  // namespace platemeter

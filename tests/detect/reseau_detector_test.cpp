@@ -1,0 +1,126 @@
+// The whole reseau detector on simulator plates with exact truth: every cross
+// gets its right id in a rotated, mirrored scan of bright crosses with dust,
+// damage and a false '+'; the measured centres agree with the truth within
+// their formal sigmas; a nominal (regular) grid's orientation is reported as
+// ambiguous instead of guessed; a given orientation is used.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+
+#include "platemeter/detect/reseau_detector.h"
+#include "platemeter/grids/registry.h"
+#include "platemeter/samples/simulate.h"
+#include "platemeter/samples/spec.h"
+#include "support/test_support.h"
+
+namespace platemeter {
+namespace {
+
+struct Rendered {
+  sim::SimulatedPlate plate;
+  std::string image_path;
+};
+
+Rendered Render(const std::string& toml, const testing::TempDir& dir) {
+  const DefinitionRegistry registry;
+  Rendered r;
+  r.plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(toml, "test spec"), registry);
+  r.image_path = sim::WriteSimulatedPlate(r.plate, dir.path().string()).image_path;
+  return r;
+}
+
+std::string Spec(const std::string& camera, const std::string& scanner, const std::string& extra) {
+  return "name = \"plate\"\ncamera = \"" + camera + "\"\nseed = 5\n" +
+         "[output]\npixel_size_um = 25.0\nmargin_mm = 1.0\n"
+         "[film]\naffine_ppm = [40.0, 5.0, -3.0, -25.0]\n"
+         "[scanner]\nrotation_deg = 0.4\nnon_orthogonality_arcsec = 10.0\n" +
+         scanner +
+         "[background]\nlevel_dn = 20000.0\nterrain_amplitude_dn = 3000.0\nterrain_scale_mm = 15.0\n"
+         "[noise]\nblur_sigma_um = 8.0\nsensor_sigma_dn = 100.0\ngrain_sigma_dn = 150.0\n" +
+         extra;
+}
+
+TEST(ReseauDetector, RightIdsInARotatedMirroredDegradedScan) {
+  testing::TempDir dir;
+  const Rendered r = Render(Spec("sn004-terrain", "orientation_deg = 90\nmirrored = true\n",
+                                 "[marks.reseau]\npolarity = \"bright\"\ncontrast_dn = 12000.0\n"
+                                 "[defects]\ndust_count = 30\ndamaged_crosses = [\"X4Y4\"]\n"
+                                 "[[defects.false_mark]]\nnear = \"X4Y4\"\noffset_um = [3000.0, 0.0]\n"),
+                            dir);
+  const DefinitionRegistry registry;
+  ReseauDetectorOptions options;
+  options.pixel_size_um = 25.0;
+  const ReseauDetection d = DetectReseau(Image::Open(r.image_path), registry.Grid("ikogon-b"), options);
+  ASSERT_TRUE(d.found) << d.summary;
+  EXPECT_EQ(d.orientation.Name(), "90m") << d.orientation_evidence;
+  EXPECT_FALSE(d.orientation_ambiguous) << d.orientation_evidence;
+  EXPECT_EQ(d.polarity, 1);
+
+  std::map<std::string, const MeasuredPoint*> truth;
+  for (const MeasuredPoint& p : r.plate.truth)
+    if (p.kind == PointKind::kReseau) truth[p.id] = &p;
+  int measured = 0;
+  double sum_z2 = 0;
+  for (const DetectedPoint& p : d.points) {
+    ASSERT_TRUE(truth.count(p.id)) << p.id;
+    if (p.status != PointStatus::kMeasured) continue;
+    ++measured;
+    const MeasuredPoint& t = *truth[p.id];
+    const double dx = p.position_px.x_px - *t.x_px, dy = p.position_px.y_px - *t.y_px;
+    ASSERT_LT(std::hypot(dx, dy), 0.5) << p.id << " is not where its id says";  // a wrong id is a grid spacing off
+    const bool damaged = std::find(t.flags.begin(), t.flags.end(), "damaged") != t.flags.end();
+    if (!damaged) sum_z2 += dx * dx / (p.sigma_x_px * p.sigma_x_px) + dy * dy / (p.sigma_y_px * p.sigma_y_px);
+  }
+  EXPECT_GE(measured, 119);  // the damaged cross may be rejected, dust may touch one
+  // Honest sigmas: the normalized errors have unit variance (within the scatter of ~240 samples and model error).
+  const double z_rms = std::sqrt(sum_z2 / (2.0 * measured));
+  EXPECT_GT(z_rms, 0.7);
+  EXPECT_LT(z_rms, 1.5);
+}
+
+TEST(ReseauDetector, RegularGridOrientationIsAmbiguousUnlessGiven) {
+  testing::TempDir dir;
+  const Rendered r = Render(Spec("orbigon", "orientation_deg = 180\n", ""), dir);
+  const DefinitionRegistry registry;
+  const Image image = Image::Open(r.image_path);
+  ReseauDetectorOptions options;
+  options.pixel_size_um = 25.0;
+  const ReseauDetection guessed = DetectReseau(image, registry.Grid("orbigon-reseau"), options);
+  ASSERT_TRUE(guessed.found) << guessed.summary;
+  EXPECT_TRUE(guessed.orientation_ambiguous) << guessed.orientation_evidence;
+
+  ScanOrientation given;
+  ASSERT_TRUE(ParseScanOrientation("180", &given));
+  options.orientation = given;
+  const ReseauDetection d = DetectReseau(image, registry.Grid("orbigon-reseau"), options);
+  ASSERT_TRUE(d.found) << d.summary;
+  EXPECT_FALSE(d.orientation_ambiguous);
+  int right = 0;
+  for (const DetectedPoint& p : d.points) {
+    if (p.status != PointStatus::kMeasured) continue;
+    for (const MeasuredPoint& t : r.plate.truth) {
+      if (t.kind == PointKind::kReseau && t.id == p.id && t.x_px &&
+          std::hypot(p.position_px.x_px - *t.x_px, p.position_px.y_px - *t.y_px) < 0.5)
+        ++right;
+    }
+  }
+  EXPECT_EQ(right, d.measured);
+  EXPECT_GE(d.measured, 119);
+}
+
+TEST(ReseauDetector, NoGridInAnEmptyScan) {
+  testing::TempDir dir;
+  const Rendered r = Render("name = \"empty\"\ncamera = \"sn004-terrain\"\n[output]\npixel_size_um = 25.0\n"
+                            "[marks.reseau]\ncontrast_dn = 1.0\n[noise]\nsensor_sigma_dn = 50.0\n",
+                            dir);
+  const DefinitionRegistry registry;
+  ReseauDetectorOptions options;
+  options.pixel_size_um = 25.0;
+  const ReseauDetection d = DetectReseau(Image::Open(r.image_path), registry.Grid("ikogon-b"), options);
+  EXPECT_FALSE(d.found && d.measured > 10) << d.summary;
+}
+
+}  // namespace
+}  // namespace platemeter

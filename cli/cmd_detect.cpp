@@ -1,187 +1,40 @@
 // platemeter detect SCAN (--camera NAME | --grid NAME) -o DIR: reseau crosses
 // and fiducial marks with ids, positions, sigmas and statuses, into a
-// measurement file and a JSON summary.
-#include <nlohmann/json.hpp>
-
+// measurement file and a JSON summary (the flow is detect_run.cpp's).
 #include <filesystem>
 #include <iostream>
-#include <optional>
+#include <memory>
 
 #include "commands.h"
-#include "platemeter/core/error.h"
-#include "platemeter/core/image.h"
-#include "platemeter/core/version.h"
-#include "platemeter/detect/fiducial_detector.h"
-#include "platemeter/detect/reseau_detector.h"
-#include "platemeter/grids/registry.h"
+#include "detect_run.h"
 #include "platemeter/measure/atomic_file.h"
-#include "platemeter/measure/measurement_file.h"
-#include "platemeter/measure/sha256.h"
 
 namespace platemeter::cli {
-namespace {
-
-struct DetectArguments {
-  std::string scan;
-  std::string camera;
-  std::string grid;
-  std::optional<double> pixel_size_um;
-  std::string orientation;
-  std::string out_dir;
-  bool allow_ambiguous = false;
-};
-
-// What the two detectors found, for the outputs.
-struct Detections {
-  std::optional<ReseauDetection> reseau;
-  std::optional<FiducialDetection> fiducials;
-  ScanOrientation orientation;
-  int polarity = -1;
-};
-
-MeasurementFile ToMeasurementFile(const Detections& detections, const std::string& scan, const std::string& camera,
-                                  double pixel_size_um) {
-  MeasurementFile file;
-  file.header.plate_id = std::filesystem::path(scan).stem().string();
-  file.header.scan_file = std::filesystem::absolute(scan).string();
-  file.header.scan_sha256 = Sha256HexOfFile(scan);
-  file.header.camera = camera;
-  file.header.pixel_size_um = pixel_size_um;
-  file.header.software_version = std::string("platemeter ") + kVersion;
-  file.header.extra.push_back({"orientation", detections.orientation.Name()});
-  if (detections.reseau) file.header.extra.push_back({"polarity", detections.polarity < 0 ? "dark" : "bright"});
-  std::vector<DetectedPoint> points;
-  if (detections.reseau) points = detections.reseau->points;
-  if (detections.fiducials) points.insert(points.end(), detections.fiducials->points.begin(), detections.fiducials->points.end());
-  for (const DetectedPoint& p : points) {
-    MeasuredPoint row;
-    row.id = p.id;
-    row.kind = p.kind;
-    row.status = p.status;
-    if (p.status != PointStatus::kMissing) {
-      row.x_px = p.position_px.x_px;
-      row.y_px = p.position_px.y_px;
-      row.sigma_x_px = p.sigma_x_px;
-      row.sigma_y_px = p.sigma_y_px;
-    }
-    if (!p.reason.empty()) row.flags.push_back(std::string(PointStatusName(p.status)) + ":" + p.reason);
-    file.points.push_back(row);
-  }
-  return file;
-}
-
-nlohmann::json SummaryJson(const Detections& detections, const std::string& scan, const std::string& grid) {
-  nlohmann::json j;
-  j["scan"] = scan;
-  j["orientation"] = detections.orientation.Name();
-  if (detections.reseau) {
-    const ReseauDetection& d = *detections.reseau;
-    nlohmann::json r;
-    r["grid"] = grid;
-    r["found"] = d.found;
-    r["orientation"] = d.orientation.Name();
-    r["orientation_ambiguous"] = d.orientation_ambiguous;
-    r["orientation_evidence"] = d.orientation_evidence;
-    r["polarity"] = d.polarity < 0 ? "dark" : "bright";
-    r["counts"] = {{"measured", d.measured}, {"rejected", d.rejected}, {"missing", d.missing},
-                   {"candidates", d.candidates}};
-    r["overview_factor"] = d.overview_factor;
-    r["plate_to_pixel"] = {{"a", {d.plate_to_pixel.a[0], d.plate_to_pixel.a[1], d.plate_to_pixel.a[2], d.plate_to_pixel.a[3]}},
-                           {"t_px", {d.plate_to_pixel.t[0], d.plate_to_pixel.t[1]}}};
-    r["timings_s"] = {{"overview", d.seconds_overview}, {"candidates", d.seconds_candidates},
-                      {"assignment", d.seconds_assignment}, {"refinement", d.seconds_refinement}};
-    r["summary"] = d.summary;
-    j["reseau"] = r;
-  }
-  if (detections.fiducials) {
-    const FiducialDetection& f = *detections.fiducials;
-    nlohmann::json r;
-    r["found"] = f.found;
-    r["used_reseau_prior"] = f.used_prior;
-    r["orientation"] = f.orientation.Name();
-    r["orientation_ambiguous"] = f.orientation_ambiguous;
-    r["orientation_evidence"] = f.orientation_evidence;
-    r["counts"] = {{"measured", f.measured}, {"rejected", f.rejected}, {"missing", f.missing}};
-    r["summary"] = f.summary;
-    j["fiducials"] = r;
-  }
-  return j;
-}
-
-}  // namespace
 
 void RegisterDetectCommand(CLI::App& app, GlobalOptions& global) {
-  auto args = std::make_shared<DetectArguments>();
+  auto request = std::make_shared<DetectRequest>();
+  auto out_dir = std::make_shared<std::string>();
   auto* cmd = app.add_subcommand("detect", "find the reseau crosses and fiducials of a scan and measure them");
-  cmd->add_option("SCAN", args->scan, "the scan")->required();
-  auto* camera = cmd->add_option("--camera", args->camera, "camera definition (its grid and fiducials are searched)");
-  auto* grid = cmd->add_option("--grid", args->grid, "master grid to search for (no fiducials)");
+  cmd->add_option("SCAN", request->scan, "the scan")->required();
+  auto* camera = cmd->add_option("--camera", request->camera, "camera definition (its grid and fiducials are searched)");
+  auto* grid = cmd->add_option("--grid", request->grid, "master grid to search for (no fiducials)");
   camera->excludes(grid);
-  cmd->add_option("--pixel-size-um", args->pixel_size_um, "scan pixel size in um (default: the TIFF resolution tags)");
-  cmd->add_option("--orientation", args->orientation,
+  cmd->add_option("--pixel-size-um", request->pixel_size_um, "scan pixel size in um (default: the TIFF resolution tags)");
+  cmd->add_option("--orientation", request->orientation,
                   "known scan orientation: 0, 90, 180, 270, with m for mirrored (e.g. 90m)");
-  cmd->add_flag("--allow-ambiguous-orientation", args->allow_ambiguous,
+  cmd->add_flag("--allow-ambiguous-orientation", request->allow_ambiguous,
                 "write results even when the orientation (hence the ids) cannot be decided");
-  cmd->add_option("-o,--output", args->out_dir, "output folder")->required();
-  cmd->callback([args, &global] {
-    if (args->camera.empty() && args->grid.empty()) throw Error("detect", "give --camera NAME or --grid NAME");
+  cmd->add_option("-o,--output", *out_dir, "output folder")->required();
+  cmd->callback([request, out_dir, &global] {
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
-    const CameraDefinition* camera = args->camera.empty() ? nullptr : &registry.Camera(args->camera);
-    const std::string grid_name = camera ? camera->grid : args->grid;
-    const bool has_fiducials = camera && (!camera->fiducial_set.empty() || camera->format_corners_as_fiducials);
-    if (grid_name.empty() && !has_fiducials) {
-      throw Error("camera '" + args->camera + "'", "has neither a reseau grid nor fiducials to detect");
-    }
-    const Image image = Image::Open(args->scan);
-    const double pixel_size_um = ResolvePixelSizeUm(image.info(), args->pixel_size_um);
-    std::optional<ScanOrientation> orientation;
-    if (!args->orientation.empty()) {
-      ScanOrientation parsed;
-      if (!ParseScanOrientation(args->orientation, &parsed)) {
-        throw Error("--orientation", "'" + args->orientation + "' is not one of 0 90 180 270 0m 90m 180m 270m");
-      }
-      orientation = parsed;
-    }
-    auto check_orientation = [&](bool ambiguous, const std::string& evidence) {
-      if (ambiguous && !args->allow_ambiguous) {
-        throw Error(args->scan, "cannot tell the scan's orientation (" + evidence + "); give --orientation");
-      }
-    };
-
-    Detections detections;
-    if (!grid_name.empty()) {
-      ReseauDetectorOptions options;
-      options.pixel_size_um = pixel_size_um;
-      options.orientation = orientation;
-      detections.reseau = DetectReseau(image, registry.Grid(grid_name), options);
-      if (!detections.reseau->found) throw Error(args->scan, detections.reseau->summary);
-      check_orientation(detections.reseau->orientation_ambiguous, detections.reseau->orientation_evidence);
-      detections.orientation = detections.reseau->orientation;
-      detections.polarity = detections.reseau->polarity;
-    }
-    if (has_fiducials) {
-      // With a reseau the fiducials are predicted from it; without one they are searched for.
-      FiducialDetectorOptions options;
-      options.pixel_size_um = pixel_size_um;
-      options.orientation = orientation;
-      const FiducialSet* set = camera->fiducial_set.empty() ? nullptr : &registry.Fiducials(camera->fiducial_set);
-      const PlateToPixel* prior = detections.reseau ? &detections.reseau->plate_to_pixel : nullptr;
-      detections.fiducials = DetectFiducialMarks(image, *camera, set, prior, options);
-      if (!prior) {
-        if (!detections.fiducials->found) throw Error(args->scan, detections.fiducials->summary);
-        check_orientation(detections.fiducials->orientation_ambiguous, detections.fiducials->orientation_evidence);
-        detections.orientation = detections.fiducials->orientation;
-      }
-    }
-    std::filesystem::create_directories(args->out_dir);
-    const std::string stem = std::filesystem::path(args->scan).stem().string();
-    const std::string measurements = (std::filesystem::path(args->out_dir) / (stem + ".measurements.csv")).string();
-    const std::string summary = (std::filesystem::path(args->out_dir) / (stem + ".detect.json")).string();
-    WriteMeasurementFile(measurements, ToMeasurementFile(detections, args->scan, args->camera, pixel_size_um));
-    WriteFileAtomically(summary, SummaryJson(detections, args->scan, grid_name).dump(2) + "\n");
-    if (detections.reseau) std::cout << "reseau: " << detections.reseau->summary << "\n";
-    if (detections.fiducials) std::cout << "fiducials: " << detections.fiducials->summary << "\n";
-    std::cout << measurements << "\n" << summary << "\n";
+    const DetectRun run = RunDetection(*request, registry);
+    std::filesystem::create_directories(*out_dir);
+    const std::string stem = std::filesystem::path(request->scan).stem().string();
+    const std::string measurements = (std::filesystem::path(*out_dir) / (stem + ".measurements.csv")).string();
+    const std::string summary = (std::filesystem::path(*out_dir) / (stem + ".detect.json")).string();
+    WriteMeasurementFile(measurements, run.file);
+    WriteFileAtomically(summary, run.summary.dump(2) + "\n");
+    std::cout << run.messages << measurements << "\n" << summary << "\n";
   });
 }
 

@@ -18,5 +18,6 @@ void RegisterInfoCommand(CLI::App& app, GlobalOptions& global);
 void RegisterGridsCommand(CLI::App& app, GlobalOptions& global);
 void RegisterSimulateCommand(CLI::App& app, GlobalOptions& global);
 void RegisterDetectCommand(CLI::App& app, GlobalOptions& global);
+void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global);  // measure and validate
 
 }  // namespace platemeter::cli

@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   cli::RegisterGridsCommand(app, global);
   cli::RegisterSimulateCommand(app, global);
   cli::RegisterDetectCommand(app, global);
+  cli::RegisterMeasureCommand(app, global);
 
   try {
     app.parse(argc, argv);

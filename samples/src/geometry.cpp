@@ -72,37 +72,32 @@ bool ThermalStep::Check(std::string* why) const {
 
 // ---- emulsion depth
 
-double EmulsionDepthStep::RadialShiftMm(double r_mm) const {
-  const double n = refractive_index, c = principal_distance_mm;
-  const double sin_theta = r_mm / std::hypot(r_mm, c);
-  return depth_um * 1e-3 * sin_theta / std::sqrt(n * n - sin_theta * sin_theta);
-}
+// The radial model lives in measure/emulsion_depth.h (shared with the corrections).
+EmulsionDepthModel EmulsionDepthStep::Model() const { return {depth_um, refractive_index, principal_distance_mm}; }
 
-double EmulsionDepthStep::EquivalentScale() const {
-  return 1.0 + depth_um * 1e-3 / (refractive_index * principal_distance_mm);
-}
+double EmulsionDepthStep::RadialShiftMm(double r_mm) const { return Model().RadialShiftMm(r_mm); }
+
+double EmulsionDepthStep::EquivalentScale() const { return Model().EquivalentScale(); }
 
 double EmulsionDepthStep::DepthUmFromEquivalentScale(double scale, double refractive_index,
                                                      double principal_distance_mm) {
-  return (scale - 1.0) * refractive_index * principal_distance_mm * 1e3;
+  return EmulsionDepthModel::DepthUmFromEquivalentScale(scale, refractive_index, principal_distance_mm);
 }
 
+namespace {
+std::vector<double> RadiiMm(const std::vector<PlatePoint>& points, PlatePoint centre) {
+  std::vector<double> radii;
+  for (const PlatePoint& p : points) radii.push_back(std::hypot(p.x_mm - centre.x_mm, p.y_mm - centre.y_mm));
+  return radii;
+}
+}  // namespace
+
 double EmulsionDepthStep::FittedScale(const std::vector<PlatePoint>& points) const {
-  double num = 0, den = 0;
-  for (const PlatePoint& p : points) {
-    const double dx = p.x_mm - principal_point_mm.x_mm, dy = p.y_mm - principal_point_mm.y_mm;
-    const PlatePoint q = Forward(p);
-    num += dx * (q.x_mm - principal_point_mm.x_mm) + dy * (q.y_mm - principal_point_mm.y_mm);
-    den += dx * dx + dy * dy;
-  }
-  return den > 0 ? num / den : 1.0;
+  return Model().FittedScale(RadiiMm(points, principal_point_mm));
 }
 
 double EmulsionDepthStep::DepthUmFromFittedScale(double scale, const std::vector<PlatePoint>& points) const {
-  EmulsionDepthStep unit = *this;
-  unit.depth_um = 1.0;  // the shift is proportional to the depth
-  const double per_um = unit.FittedScale(points) - 1.0;
-  return (scale - 1.0) / per_um;
+  return Model().DepthUmFromFittedScale(scale, RadiiMm(points, principal_point_mm));
 }
 
 PlatePoint EmulsionDepthStep::Forward(PlatePoint p) const {
@@ -117,17 +112,7 @@ PlatePoint EmulsionDepthStep::Inverse(PlatePoint q) const {
   const double dx = q.x_mm - principal_point_mm.x_mm, dy = q.y_mm - principal_point_mm.y_mm;
   const double r_image = std::hypot(dx, dy);
   if (r_image == 0.0 || depth_um == 0.0) return q;
-  // Solve r + g(r) = r_image; g' > 0 and small, so Newton converges in a few steps.
-  const double n = refractive_index, c = principal_distance_mm, d_mm = depth_um * 1e-3;
-  double r = r_image / EquivalentScale();
-  for (int i = 0; i < 50; ++i) {
-    const double s = r / std::hypot(r, c);
-    const double g_prime = d_mm * n * n / std::pow(n * n - s * s, 1.5) * c * c / std::pow(r * r + c * c, 1.5);
-    const double step = (r + RadialShiftMm(r) - r_image) / (1.0 + g_prime);
-    r -= step;
-    if (std::abs(step) < 1e-15 * (1.0 + r_image)) break;
-  }
-  const double factor = r / r_image;
+  const double factor = Model().TrueRadiusMm(r_image) / r_image;
   return {principal_point_mm.x_mm + dx * factor, principal_point_mm.y_mm + dy * factor};
 }
 
@@ -140,9 +125,8 @@ Matrix2 EmulsionDepthStep::Jacobian(PlatePoint p) const {
     return Matrix2{{s0, 0, 0, s0}};
   }
   // Radial map f(r) = r + g(r): J = (f/r) I + (f' - f/r) u u^T, u = p / r.
-  const double s = r / std::hypot(r, c);
   const double f_over_r = 1.0 + RadialShiftMm(r) / r;
-  const double f_prime = 1.0 + d_mm * n * n / std::pow(n * n - s * s, 1.5) * c * c / std::pow(r * r + c * c, 1.5);
+  const double f_prime = 1.0 + Model().RadialShiftDerivative(r);
   const double ux = dx / r, uy = dy / r, k = f_prime - f_over_r;
   return Matrix2{{f_over_r + k * ux * ux, k * ux * uy, k * ux * uy, f_over_r + k * uy * uy}};
 }

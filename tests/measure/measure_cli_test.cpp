@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -60,6 +61,7 @@ sensor_sigma_dn = 100.0
   EXPECT_NEAR(j["non_orthogonality_arcsec"]["value"].get<double>(), 10.0, 2.0);
   EXPECT_EQ(j["residuals"].size(), 121u);
   EXPECT_LT(j["rms_um"].get<double>(), 2.0);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("out/plate.residuals.png")));
 
   const CommandResult m = RunPlatemeter("measure " + scan +
                                         " --camera orbigon --orientation 0 --temperature-degC 22 --emulsion-depth-um 21 -o " +
@@ -73,6 +75,7 @@ sensor_sigma_dn = 100.0
   const nlohmann::json r = ReadJson(dir.file("out/plate.measure.json"));
   // The emulsion correction applied: what remains of the scale is near zero.
   EXPECT_NEAR(r["reseau"]["emulsion_depth_reading_um"]["value"].get<double>(), 0.0, 1.0);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("out/plate.micmac.xml")));
 }
 
 }  // namespace

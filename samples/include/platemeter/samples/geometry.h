@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "platemeter/core/pixel.h"
+#include "platemeter/measure/emulsion_depth.h"
 
 namespace platemeter::sim {
 
@@ -60,6 +61,9 @@ struct EmulsionDepthStep {
   double refractive_index = 1.65;       // of the emulsion
   double principal_distance_mm = 80.2;  // mm; rear nodal point above the emulsion surface
   PlatePoint principal_point_mm;        // mm; foot of the perpendicular from the rear nodal point
+
+  // The radial model (measure/emulsion_depth.h) with these parameters.
+  EmulsionDepthModel Model() const;
 
   // r' - r in mm at the radius r_mm from the principal point.
   double RadialShiftMm(double r_mm) const;

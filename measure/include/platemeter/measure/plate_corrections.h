@@ -1,0 +1,46 @@
+#pragma once
+// The comparator corrections end to end on one measurement file
+// (docs/measure.md): pixel -> comparator -> thermal -> emulsion depth ->
+// reseau fit -> local reseau correction, filling x_mm, y_mm, sigma_x_mm,
+// sigma_y_mm of every measured point and recording each applied step in the
+// header (AppliedCorrection, in order).
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "platemeter/grids/definitions.h"
+#include "platemeter/measure/corrections.h"
+#include "platemeter/measure/measurement_file.h"
+#include "platemeter/measure/reseau_fit.h"
+
+namespace platemeter {
+
+struct PlateCorrectionOptions {
+  std::optional<double> pixel_size_um;       // um; default the file header's
+  std::optional<std::string> orientation;    // detect's name ("0", "90m", ...); default the header's "orientation", else "0"
+  std::optional<double> temperature_degC;    // degC; measuring temperature (none: no thermal correction)
+  double calibration_temperature_degC = 20.0;  // degC; of the master grid values
+  double expansion_per_degC = 8.1e-6;          // 1/degC; glass linear expansion
+  EmulsionDepthModel emulsion;                 // depth 0: no emulsion-depth correction
+  double principal_point_x_mm = 0.0, principal_point_y_mm = 0.0;  // mm; grid frame, centre of the radial model
+  ReseauFitOptions fit;
+  bool local_reseau = true;                    // bilinear correction of every non-reseau point
+  bool Check(std::string* why) const;
+};
+
+struct PlateCorrectionReport {
+  ComparatorCorrection comparator;
+  ThermalCorrection thermal;
+  EmulsionDepthCorrection emulsion;
+  std::vector<ReseauObservation> observations;  // the measured crosses given to the fit
+  ReseauFit fit;
+  // The fit's mean scale read as an emulsion depth: (scale - 1) n c (um), with
+  // its sigma; meaningful when the emulsion correction was off.
+  ValueSigma emulsion_depth_reading_um;
+  int points_corrected = 0;
+};
+
+// Throws Error(plate id, reason) without a pixel size or with too few crosses.
+PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid, const PlateCorrectionOptions& options);
+
+}  // namespace platemeter

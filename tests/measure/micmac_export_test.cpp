@@ -43,7 +43,8 @@ TEST(MicMacExport, ParsesWithMicMacElementNames) {
   testing::TempDir dir;
   const std::string path = dir.file("m.xml");
   WriteMicMacMeasures(path, file);
-  if (Shell("command -v xmllint").empty()) GTEST_SKIP() << "xmllint not installed";
+  // scripts/setup installs xmllint (libxml2-utils): a missing parser is a failure, not a skip.
+  ASSERT_FALSE(Shell("command -v xmllint").empty()) << "xmllint not installed (Debian package libxml2-utils)";
   const std::string root = "/SetOfMesureAppuisFlottants/MesureAppuiFlottant1Im";
   auto xpath = [&](const std::string& expr) {
     std::string out = Shell("xmllint --xpath '" + expr + "' " + path + " 2>&1");

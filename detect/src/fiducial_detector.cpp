@@ -62,14 +62,10 @@ std::vector<Target> TargetsOf(const CameraDefinition& camera, const FiducialSet*
 }
 
 Eigen::Matrix2d OrientationMatrix(const ScanOrientation& o) {
-  Eigen::Matrix2d mirror = Eigen::Matrix2d::Identity();
-  if (o.mirrored) mirror(0, 0) = -1;
-  const double a = o.rotation_deg * kPi / 180.0;
-  Eigen::Matrix2d rotation;
-  rotation << std::round(std::cos(a)), -std::round(std::sin(a)), std::round(std::sin(a)), std::round(std::cos(a));
-  Eigen::Matrix2d flip = Eigen::Matrix2d::Identity();
-  flip(1, 1) = -1;
-  return flip * rotation * mirror;
+  const std::array<int, 4> m = o.PixelAxesFromPlate();
+  Eigen::Matrix2d matrix;
+  matrix << m[0], m[1], m[2], m[3];
+  return matrix;
 }
 
 Eigen::Matrix2d MatrixOf(const PlateToPixel& m) {

@@ -50,17 +50,11 @@ class CandidateIndex {
   std::unordered_map<long long, std::vector<int>> buckets_;
 };
 
-// Plate axes onto pixel axes: mirror x, rotate by the orientation (plate frame,
-// counter-clockwise), then flip y because pixel rows run down.
 Eigen::Matrix2d OrientationMatrix(const ScanOrientation& o) {
-  Eigen::Matrix2d mirror = Eigen::Matrix2d::Identity();
-  if (o.mirrored) mirror(0, 0) = -1;
-  const double a = o.rotation_deg * kPi / 180.0;
-  Eigen::Matrix2d rotation;
-  rotation << std::round(std::cos(a)), -std::round(std::sin(a)), std::round(std::sin(a)), std::round(std::cos(a));
-  Eigen::Matrix2d flip = Eigen::Matrix2d::Identity();
-  flip(1, 1) = -1;
-  return flip * rotation * mirror;
+  const std::array<int, 4> m = o.PixelAxesFromPlate();
+  Eigen::Matrix2d matrix;
+  matrix << m[0], m[1], m[2], m[3];
+  return matrix;
 }
 
 double MedianNearestNeighbourMm(const MasterGrid& grid) {
@@ -186,6 +180,16 @@ bool FitSimilarity(const MasterGrid& grid, const std::vector<CrossCandidate>& ca
 }
 
 }  // namespace
+
+std::array<int, 4> ScanOrientation::PixelAxesFromPlate() const {
+  // Rotation by a multiple of 90 degrees in the plate frame (counter-clockwise, y up).
+  const int quarter = ((rotation_deg / 90) % 4 + 4) % 4;
+  static const int kCos[4] = {1, 0, -1, 0}, kSin[4] = {0, 1, 0, -1};
+  const int c = kCos[quarter], s = kSin[quarter];
+  const int mx = mirrored ? -1 : 1;
+  // flip_y * [[c, -s], [s, c]] * diag(mx, 1)
+  return {c * mx, -s, -s * mx, -c};
+}
 
 std::string ScanOrientation::Name() const { return std::to_string(rotation_deg) + (mirrored ? "m" : ""); }
 

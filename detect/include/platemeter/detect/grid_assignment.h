@@ -10,6 +10,7 @@
 // hypotheses tie here and are all returned, so that a later stage can separate
 // them with finer evidence (the grid's calibrated deviations, fiducials, or the
 // user's word).
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,6 +27,9 @@ struct ScanOrientation {
   bool mirrored = false;
   std::string Name() const;  // "0", "90", "180", "270", "0m", ...
   static std::vector<ScanOrientation> All();
+  // Plate axes onto pixel axes (row-major 2x2 of 0/+-1): mirror x, rotate by the
+  // orientation in the plate frame, then flip y because pixel rows run down.
+  std::array<int, 4> PixelAxesFromPlate() const;
 };
 bool ParseScanOrientation(const std::string& text, ScanOrientation* orientation);
 

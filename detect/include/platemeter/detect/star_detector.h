@@ -1,0 +1,91 @@
+#pragma once
+// Point-image (star) detection over a whole scan in bands of rows with bounded
+// memory, as SExtractor does it but with a PSF fit at the end:
+//   1. background and noise on a mesh of cells (sigma-clipped mode per cell,
+//      3x3 median of the mesh, bilinear interpolation);
+//   2. a matched filter (Gaussian of the PSF's sigma) and a threshold in units
+//      of the filtered noise;
+//   3. connected components (8-connected) with shape tests (line-like,
+//      cross-like and oversized components are defects, not stars);
+//   4. per component a least-squares fit of pixel-integrated circular Gaussians
+//      (position, flux, width per star, one background); a second star is added
+//      when it lowers chi^2 significantly (close pairs, fitted jointly);
+//      saturated pixels are left out, so saturated stars are fitted from
+//      their wings.
+// Formal sigmas are the position block of (J^T J)^-1 scaled by the fit's own
+// residual variance. Algorithm details in docs/stars.md.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "platemeter/core/image.h"
+#include "platemeter/core/pixel.h"
+#include "platemeter/detect/point.h"
+
+namespace platemeter {
+
+// Bit flags of a detected star.
+enum StarFlag : unsigned {
+  kStarSaturated = 1u << 0,   // pixels at the clip levels were left out of the fit
+  kStarBlended = 1u << 1,     // fitted jointly with a neighbour
+  kStarTruncated = 1u << 2,   // fit window cut by the image edge
+  kStarElongated = 1u << 3,   // ellipticity above the limit (dash, trail, double)
+  kStarDefect = 1u << 4,      // shape far from the PSF, line- or cross-like, or masked: not a star
+};
+// "saturated,blended,..." (empty for none).
+std::string StarFlagNames(unsigned flags);
+
+struct StarDetectorOptions {
+  bool dark = true;                       // stars darker than the background (negative plate)
+  double psf_fwhm_px = 2.5;               // px; expected FWHM of a point image (matched filter, start of the fit)
+  int mesh_px = 64;                       // px; side of a background mesh cell
+  double clip_sigma = 3.0;                // sigma-clipping limit of the mesh statistics
+  double threshold_sigma = 4.0;           // detection threshold in sigma of the matched-filtered noise
+  int min_pixels = 2;                     // px; smallest component kept
+  int band_rows = 512;                    // px; rows processed at once (memory ~ 20 bytes x width x (band + 2 mesh))
+  std::optional<double> saturation_dn;    // DN; pixels at or above are clipped (default: the file's full scale)
+  double floor_dn = 0.0;                  // DN; pixels at or below are clipped (dark stars on a negative)
+  double max_fwhm_ratio = 1.8;            // fitted FWHM / psf_fwhm_px above this: defect (dust, blob)
+  double min_fwhm_ratio = 0.4;            // below this: defect (hot pixel, grain)
+  double max_ellipticity = 0.3;           // 1 - b/a above this: elongated
+  double max_component_fwhm = 12.0;       // component bounding box longer than this many PSF FWHM: defect (line, cross)
+  double pair_chi2_gain = 30.0;           // chi^2 decrease needed to accept a second star in a component
+  double min_snr = 5.0;                   // flux / sigma(flux) below this: dropped
+  bool windowed_centroid = false;         // true: SExtractor's windowed centroid (XWIN, Gaussian window of the PSF's
+                                          // sigma) for unblended stars instead of the PSF fit's position
+  std::vector<PixelPoint> mask_px;        // known non-star marks (reseau crosses' positions)
+  double mask_radius_px = 10.0;           // px; components within this of a mask point are defects
+  bool Check(std::string* why) const;
+};
+
+struct DetectedStar {
+  DetectedPoint point;          // kind star; measured, or rejected with reason "defect"
+  double flux_dn = 0.0;         // DN px^2; total flux of the fitted Gaussian (positive contrast)
+  double sigma_flux_dn = 0.0;   // DN px^2; formal
+  double peak_dn = 0.0;         // DN; fitted peak contrast
+  double background_dn = 0.0;   // DN; local background (mesh + fitted offset)
+  double fwhm_px = 0.0;         // px; fitted FWHM
+  double ellipticity = 0.0;     // 1 - b/a from Gaussian-weighted second moments
+  double snr = 0.0;             // flux / sigma_flux
+  unsigned flags = 0;           // StarFlag bits
+};
+
+struct StarDetectionStats {
+  double noise_sigma_dn = 0.0;  // median per-cell background sigma (the image's sigma)
+  long components = 0;          // connected components above the threshold
+  long defects = 0;             // components or fits rejected as defects
+  long bands = 0;
+};
+
+// Detects and measures the point images of a whole scan. Throws Error for
+// invalid options.
+std::vector<DetectedStar> DetectStars(const Image& image, const StarDetectorOptions& options = {},
+                                      StarDetectionStats* stats = nullptr);
+
+// The same on rows already in memory (row-major, width x height DN values):
+// for tests and for callers that hold a window.
+std::vector<DetectedStar> DetectStarsInBuffer(const float* values_dn, long width_px, long height_px,
+                                              double full_scale_dn, const StarDetectorOptions& options = {},
+                                              StarDetectionStats* stats = nullptr);
+
+}  // namespace platemeter

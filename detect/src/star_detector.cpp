@@ -1,0 +1,390 @@
+// Star detection driver: bands of rows, background mesh, matched filter,
+// components, shape tests and the Gaussian fits (star_detector.h).
+#include "platemeter/detect/star_detector.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "platemeter/core/error.h"
+#include "star_internal.h"
+
+namespace platemeter {
+namespace {
+
+using star_internal::BackgroundMesh;
+using star_internal::FitPixel;
+using star_internal::FittedGaussian;
+using star_internal::GaussianFitResult;
+
+constexpr double kFwhmPerSigma = 2.3548200450309493;
+
+struct Band {
+  const float* raw = nullptr;
+  long width = 0, rows = 0;
+  long y0_abs = 0;             // absolute row of the buffer's first row
+  long keep_y0 = 0, keep_y1 = 0;  // absolute rows whose components this band reports
+  long image_height = 0;
+  double high_dn = 0, low_dn = 0;  // clip levels
+};
+
+// 1 - b/a from Gaussian-weighted second moments (weight sigma w), corrected for the weight.
+double Ellipticity(const std::vector<FitPixel>& pixels, double x0, double y0, double offset, double w) {
+  double s = 0, sxx = 0, syy = 0, sxy = 0;
+  for (const FitPixel& p : pixels) {
+    const double dx = p.x_px - x0, dy = p.y_px - y0;
+    const double c = (p.value_dn - offset) * std::exp(-0.5 * (dx * dx + dy * dy) / (w * w));
+    s += c, sxx += c * dx * dx, syy += c * dy * dy, sxy += c * dx * dy;
+  }
+  if (s <= 0) return 0.0;
+  Eigen::Matrix2d m;
+  m << sxx / s, sxy / s, sxy / s, syy / s;
+  const Eigen::Vector2d l = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(m).eigenvalues();
+  auto unweight = [w](double v) { return v < 0.95 * w * w ? v * w * w / (w * w - v) : 20.0 * w * w; };
+  const double small = unweight(std::max(l(0), 1e-6)), large = unweight(std::max(l(1), 1e-6));
+  return 1.0 - std::sqrt(small / large);
+}
+
+// SExtractor's windowed centroid: iterated Gaussian-weighted first moments,
+// x <- x + 2 sum(w c (x_i - x)) / sum(w c), within 4 window sigmas; its sigma
+// from the propagation of white pixel noise.
+struct Windowed {
+  bool ok = false;
+  double x = 0, y = 0, sigma_x = 0, sigma_y = 0;
+};
+Windowed WindowedCentroid(const std::vector<FitPixel>& pixels, double x, double y, double offset, double w,
+                          double noise) {
+  Windowed r;
+  for (int iteration = 0; iteration < 16; ++iteration) {
+    double s = 0, sx = 0, sy = 0;
+    for (const FitPixel& p : pixels) {
+      const double dx = p.x_px - x, dy = p.y_px - y, r2 = dx * dx + dy * dy;
+      if (r2 > 16 * w * w) continue;
+      const double c = (p.value_dn - offset) * std::exp(-0.5 * r2 / (w * w));
+      s += c, sx += c * dx, sy += c * dy;
+    }
+    if (s <= 0) return r;
+    const double step_x = 2 * sx / s, step_y = 2 * sy / s;
+    x += step_x, y += step_y;
+    if (std::hypot(step_x, step_y) < 2e-5) break;
+  }
+  double s = 0, vx = 0, vy = 0;
+  for (const FitPixel& p : pixels) {
+    const double dx = p.x_px - x, dy = p.y_px - y, r2 = dx * dx + dy * dy;
+    if (r2 > 16 * w * w) continue;
+    const double g = std::exp(-0.5 * r2 / (w * w));
+    s += (p.value_dn - offset) * g, vx += g * g * dx * dx, vy += g * g * dy * dy;
+  }
+  if (s <= 0) return r;
+  r.ok = true;
+  r.x = x, r.y = y;
+  r.sigma_x = 2 * noise * std::sqrt(vx) / s;
+  r.sigma_y = 2 * noise * std::sqrt(vy) / s;
+  return r;
+}
+
+DetectedStar Defect(double x, double y, const std::string& why) {
+  DetectedStar d;
+  d.point.kind = PointKind::kStar;
+  d.point.status = PointStatus::kRejected;
+  d.point.reason = "defect";
+  d.point.position_px = {x, y};
+  d.flags = kStarDefect;
+  (void)why;
+  return d;
+}
+
+void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<DetectedStar>* out, StarDetectionStats* stats) {
+  const double sign = o.dark ? -1.0 : 1.0;
+  const double psf_sigma = o.psf_fwhm_px / kFwhmPerSigma;
+  const BackgroundMesh mesh =
+      star_internal::ComputeBackgroundMesh(b.raw, b.width, b.rows, o.mesh_px, o.clip_sigma, b.low_dn, b.high_dn);
+
+  cv::Mat contrast(static_cast<int>(b.rows), static_cast<int>(b.width), CV_32F);
+  tbb::parallel_for(0L, b.rows, [&](long y) {
+    float* c = contrast.ptr<float>(static_cast<int>(y));
+    const float* r = b.raw + y * b.width;
+    std::vector<float> level(b.width);
+    mesh.LevelRow(y, b.width, level.data());
+    for (long x = 0; x < b.width; ++x) c[x] = static_cast<float>(sign * (r[x] - level[x]));
+  });
+  // Matched filter: a Gaussian of the PSF's sigma; its noise is sigma * sum(w^2)^(1/2).
+  const int ksize = 2 * static_cast<int>(std::ceil(3.0 * psf_sigma)) + 1;
+  const cv::Mat kernel = cv::getGaussianKernel(ksize, psf_sigma, CV_64F);
+  const double noise_gain = kernel.dot(kernel);  // 2-D sum(w^2) = (1-D sum)^2, its root is the 1-D sum
+  cv::Mat filtered;
+  cv::GaussianBlur(contrast, filtered, cv::Size(ksize, ksize), psf_sigma, psf_sigma, cv::BORDER_REFLECT);
+  cv::Mat mask(filtered.size(), CV_8U);
+  tbb::parallel_for(0L, b.rows, [&](long y) {
+    const float* f = filtered.ptr<float>(static_cast<int>(y));
+    uint8_t* m = mask.ptr<uint8_t>(static_cast<int>(y));
+    for (long x = 0; x < b.width; ++x) m[x] = f[x] > o.threshold_sigma * noise_gain * mesh.SigmaAt(x, y) ? 1 : 0;
+  });
+  cv::Mat labels, comp, centroids;
+  const int n = cv::connectedComponentsWithStats(mask, labels, comp, centroids, 8, CV_32S);
+  mask.release();
+
+  std::vector<std::vector<DetectedStar>> found(n);
+  tbb::parallel_for(1, n, [&](int l) {
+    const int area = comp.at<int>(l, cv::CC_STAT_AREA);
+    if (area < o.min_pixels) return;
+    const int bx = comp.at<int>(l, cv::CC_STAT_LEFT), by = comp.at<int>(l, cv::CC_STAT_TOP);
+    const int bw = comp.at<int>(l, cv::CC_STAT_WIDTH), bh = comp.at<int>(l, cv::CC_STAT_HEIGHT);
+    int px = bx, py = by;
+    float best = -1e30f;
+    for (int y = by; y < by + bh; ++y)
+      for (int x = bx; x < bx + bw; ++x)
+        if (labels.at<int>(y, x) == l && filtered.at<float>(y, x) > best) best = filtered.at<float>(y, x), px = x, py = y;
+    const long peak_y_abs = b.y0_abs + py;
+    if (peak_y_abs < b.keep_y0 || peak_y_abs >= b.keep_y1) return;
+    std::vector<DetectedStar>& result = found[l];
+    // Shape tests on the component: lines (scratches, dashes, trails), crosses, masked marks.
+    const double long_side = std::max(bw, bh);
+    const bool line_like = long_side > o.max_component_fwhm * o.psf_fwhm_px;
+    const bool sparse = long_side > 4.0 * o.psf_fwhm_px && area < 0.3 * bw * bh;
+    bool masked = false;
+    for (const PixelPoint& m : o.mask_px)
+      if (std::hypot(m.x_px - px, m.y_px - peak_y_abs) < o.mask_radius_px) masked = true;
+    if (line_like || sparse || masked) {
+      result.push_back(Defect(px, peak_y_abs, line_like ? "line" : sparse ? "cross" : "masked"));
+      return;
+    }
+    // Fit window: the component grown by the PSF, and at least +-3 sigma around the peak.
+    const int grow = static_cast<int>(std::ceil(psf_sigma)) + 1;
+    const int half = static_cast<int>(std::ceil(3.0 * psf_sigma)) + 1;
+    int x0 = std::min(bx, px - half) - grow, x1 = std::max(bx + bw, px + half + 1) + grow;
+    int y0 = std::min(by, py - half) - grow, y1 = std::max(by + bh, py + half + 1) + grow;
+    x0 = std::max(x0, px - 40), x1 = std::min(x1, px + 41), y0 = std::max(y0, py - 40), y1 = std::min(y1, py + 41);
+    bool truncated = false;
+    if (x0 < 0) x0 = 0, truncated = true;
+    if (x1 > b.width) x1 = static_cast<int>(b.width), truncated = true;
+    if (y0 < 0) { y0 = 0; truncated = truncated || b.y0_abs == 0; }
+    if (y1 > b.rows) { y1 = static_cast<int>(b.rows); truncated = truncated || b.y0_abs + b.rows == b.image_height; }
+    std::vector<FitPixel> pixels;
+    int clipped = 0;
+    double peak_contrast = 0;
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const int lab = labels.at<int>(y, x);
+        if (lab != 0 && lab != l) continue;  // another component's pixels
+        const float raw = b.raw[long(y) * b.width + x];
+        if (raw >= b.high_dn || raw <= b.low_dn) {
+          ++clipped;
+          continue;
+        }
+        const float c = contrast.at<float>(y, x);
+        if (lab == l) peak_contrast = std::max<double>(peak_contrast, c);
+        pixels.push_back({float(x), float(b.y0_abs + y), c});
+      }
+    const double noise = std::max(1e-3f, mesh.SigmaAt(px, py));
+    FittedGaussian start;
+    start.x_px = px;
+    start.y_px = peak_y_abs;
+    start.sigma_px = psf_sigma;
+    start.flux_dn = std::max(4.0 * M_PI * psf_sigma * psf_sigma * best, 2.0 * M_PI * psf_sigma * psf_sigma * peak_contrast);
+    const double min_sigma = o.min_fwhm_ratio * psf_sigma * 0.5;
+    GaussianFitResult fit = star_internal::FitGaussians(pixels, {start}, noise, min_sigma);
+    if (fit.stars.empty()) return;
+    const int dof1 = fit.pixels - 5;
+    const double ratio1 = fit.stars[0].sigma_px / psf_sigma;
+    bool blended = false;
+    // A second star is tried when the single one is too wide for its SNR or
+    // leaves a chi^2 excess of 5 sigma.
+    const double snr1 = fit.stars[0].sigma_flux_dn > 0 ? fit.stars[0].flux_dn / fit.stars[0].sigma_flux_dn : 0.0;
+    if ((ratio1 > 1.12 && snr1 > 30) || fit.chi2 > dof1 + 5.0 * std::sqrt(2.0 * dof1)) {
+      // Two stars along the component's major axis, split by the excess second moment.
+      double s = 0, sx = 0, sy = 0;
+      for (const FitPixel& p : pixels)
+        if (p.value_dn > 0) s += p.value_dn, sx += p.value_dn * p.x_px, sy += p.value_dn * p.y_px;
+      const double cx = fit.stars[0].x_px, cy = fit.stars[0].y_px;
+      double sxx = 0, syy = 0, sxy = 0, w = 0;
+      for (const FitPixel& p : pixels) {
+        const double dx = p.x_px - cx, dy = p.y_px - cy;
+        if (p.value_dn <= 0 || dx * dx + dy * dy > 36 * psf_sigma * psf_sigma) continue;
+        w += p.value_dn, sxx += p.value_dn * dx * dx, syy += p.value_dn * dy * dy, sxy += p.value_dn * dx * dy;
+      }
+      if (w > 0) {
+        Eigen::Matrix2d m;
+        m << sxx / w, sxy / w, sxy / w, syy / w;
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(m);
+        const Eigen::Vector2d axis = eig.eigenvectors().col(1);
+        const double h = std::sqrt(std::max(eig.eigenvalues()(1) - eig.eigenvalues()(0), 0.5));
+        FittedGaussian a = start, c = start;
+        a.x_px = cx + h * axis(0), a.y_px = cy + h * axis(1);
+        c.x_px = cx - h * axis(0), c.y_px = cy - h * axis(1);
+        a.flux_dn = c.flux_dn = 0.5 * fit.stars[0].flux_dn;
+        GaussianFitResult pair = star_internal::FitGaussians(pixels, {a, c}, noise, min_sigma);
+        // Second start: the single fit plus a star at the largest residual of the
+        // component (wider pairs, where the single fit sits on the brighter star).
+        {
+          const GaussianFitResult& f = fit;
+          const FittedGaussian& g = f.stars[0];
+          double worst = -1e30;
+          FittedGaussian second = start;
+          for (const FitPixel& p : pixels) {
+            if (labels.at<int>(int(p.y_px - b.y0_abs), int(p.x_px)) != l) continue;
+            const double model = f.offset_dn + g.flux_dn * std::exp(-0.5 * (std::pow(p.x_px - g.x_px, 2) + std::pow(p.y_px - g.y_px, 2)) /
+                                                                    (g.sigma_px * g.sigma_px)) / (2 * M_PI * g.sigma_px * g.sigma_px);
+            if (p.value_dn - model > worst) worst = p.value_dn - model, second.x_px = p.x_px, second.y_px = p.y_px;
+          }
+          second.flux_dn = std::max(worst, 0.0) * 2 * M_PI * psf_sigma * psf_sigma;
+          FittedGaussian first = g;
+          first.sigma_px = psf_sigma;
+          GaussianFitResult alt = star_internal::FitGaussians(pixels, {first, second}, noise, min_sigma);
+          if (alt.stars.size() == 2 && (pair.stars.size() != 2 || alt.chi2 < pair.chi2)) pair = std::move(alt);
+        }
+        if (pair.stars.size() == 2 && fit.chi2 - pair.chi2 > o.pair_chi2_gain) {
+          bool ok = true;
+          for (const FittedGaussian& g : pair.stars) {
+            const double r = g.sigma_px / psf_sigma;
+            if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn || r > o.max_fwhm_ratio || r < o.min_fwhm_ratio) ok = false;
+          }
+          if (std::hypot(pair.stars[0].x_px - pair.stars[1].x_px, pair.stars[0].y_px - pair.stars[1].y_px) < 0.7 * o.psf_fwhm_px)
+            ok = false;
+          if (ok) fit = std::move(pair), blended = true;
+        }
+      }
+    }
+    for (const FittedGaussian& g : fit.stars) {
+      const double ratio = g.sigma_px / psf_sigma;
+      if (ratio > o.max_fwhm_ratio || ratio < o.min_fwhm_ratio) {
+        result.push_back(Defect(g.x_px, g.y_px, "shape"));
+        continue;
+      }
+      if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn) continue;
+      if (g.x_px < x0 - 0.5 || g.x_px > x1 - 0.5 || g.y_px < b.y0_abs + y0 - 0.5 || g.y_px > b.y0_abs + y1 - 0.5) continue;
+      DetectedStar d;
+      d.point.kind = PointKind::kStar;
+      d.point.status = PointStatus::kMeasured;
+      d.point.position_px = {g.x_px, g.y_px};
+      d.point.sigma_x_px = g.sigma_x_px;
+      d.point.sigma_y_px = g.sigma_y_px;
+      d.point.correlation_xy = g.correlation_xy;
+      d.flux_dn = g.flux_dn;
+      d.sigma_flux_dn = g.sigma_flux_dn;
+      d.peak_dn = g.flux_dn / (2.0 * M_PI * g.sigma_px * g.sigma_px);
+      d.background_dn = mesh.LevelAt(g.x_px, g.y_px - b.y0_abs) + sign * fit.offset_dn;
+      d.fwhm_px = g.sigma_px * kFwhmPerSigma;
+      d.snr = g.sigma_flux_dn > 0 ? g.flux_dn / g.sigma_flux_dn : 0.0;
+      if (!blended) d.ellipticity = Ellipticity(pixels, g.x_px, g.y_px, fit.offset_dn, std::max(g.sigma_px, psf_sigma));
+      if (!blended && o.windowed_centroid) {
+        const Windowed w = WindowedCentroid(pixels, g.x_px, g.y_px, fit.offset_dn, psf_sigma, fit.residual_sigma_dn);
+        if (w.ok) {
+          d.point.position_px = {w.x, w.y};
+          d.point.sigma_x_px = w.sigma_x, d.point.sigma_y_px = w.sigma_y, d.point.correlation_xy = 0.0;
+        }
+      }
+      if (clipped > 0) d.flags |= kStarSaturated;
+      if (blended) d.flags |= kStarBlended;
+      if (truncated) d.flags |= kStarTruncated;
+      if (d.ellipticity > o.max_ellipticity && d.snr > 20) d.flags |= kStarElongated;
+      result.push_back(d);
+    }
+  });
+  for (auto& v : found)
+    for (auto& d : v) {
+      if (stats && d.point.status == PointStatus::kRejected) ++stats->defects;
+      out->push_back(std::move(d));
+    }
+  if (stats) stats->components += n - 1, ++stats->bands;
+  if (stats && stats->noise_sigma_dn == 0 && !mesh.sigma_dn.empty()) {
+    std::vector<float> s = mesh.sigma_dn;
+    std::nth_element(s.begin(), s.begin() + s.size() / 2, s.end());
+    stats->noise_sigma_dn = s[s.size() / 2];
+  }
+}
+
+void Finish(std::vector<DetectedStar>* stars) {
+  std::sort(stars->begin(), stars->end(), [](const DetectedStar& a, const DetectedStar& b) {
+    return a.point.position_px.y_px != b.point.position_px.y_px ? a.point.position_px.y_px < b.point.position_px.y_px
+                                                                : a.point.position_px.x_px < b.point.position_px.x_px;
+  });
+  for (size_t i = 0; i < stars->size(); ++i) (*stars)[i].point.id = fmt::format("P{:06d}", i + 1);
+}
+
+void CheckOrThrow(const StarDetectorOptions& options) {
+  std::string why;
+  if (!options.Check(&why)) throw Error("star detector options", why);
+}
+
+}  // namespace
+
+std::string StarFlagNames(unsigned flags) {
+  static const char* names[] = {"saturated", "blended", "truncated", "elongated", "defect"};
+  std::string s;
+  for (int i = 0; i < 5; ++i)
+    if (flags & (1u << i)) s += (s.empty() ? "" : ",") + std::string(names[i]);
+  return s;
+}
+
+bool StarDetectorOptions::Check(std::string* why) const {
+  auto fail = [why](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(psf_fwhm_px >= 0.8 && psf_fwhm_px <= 50)) return fail("psf_fwhm_px must be 0.8..50");
+  if (mesh_px < 8) return fail("mesh_px must be at least 8");
+  if (!(clip_sigma > 1)) return fail("clip_sigma must exceed 1");
+  if (!(threshold_sigma > 0)) return fail("threshold_sigma must be positive");
+  if (min_pixels < 1) return fail("min_pixels must be at least 1");
+  if (band_rows < 16) return fail("band_rows must be at least 16");
+  if (!(max_fwhm_ratio > 1 && min_fwhm_ratio > 0 && min_fwhm_ratio < 1)) return fail("fwhm ratio limits must bracket 1");
+  if (!(max_ellipticity > 0 && max_ellipticity < 1)) return fail("max_ellipticity must be in (0, 1)");
+  if (!(max_component_fwhm > 2)) return fail("max_component_fwhm must exceed 2");
+  if (!(pair_chi2_gain > 0) || !(min_snr > 0) || !(mask_radius_px >= 0)) return fail("pair_chi2_gain, min_snr must be positive");
+  return true;
+}
+
+std::vector<DetectedStar> DetectStarsInBuffer(const float* values_dn, long width_px, long height_px, double full_scale_dn,
+                                              const StarDetectorOptions& options, StarDetectionStats* stats) {
+  CheckOrThrow(options);
+  Band b;
+  b.raw = values_dn;
+  b.width = width_px, b.rows = height_px, b.image_height = height_px;
+  b.keep_y0 = 0, b.keep_y1 = height_px;
+  b.high_dn = options.saturation_dn.value_or(full_scale_dn);
+  b.low_dn = options.floor_dn;
+  std::vector<DetectedStar> stars;
+  ProcessBand(b, options, &stars, stats);
+  Finish(&stars);
+  return stars;
+}
+
+std::vector<DetectedStar> DetectStars(const Image& image, const StarDetectorOptions& options, StarDetectionStats* stats) {
+  CheckOrThrow(options);
+  const long width = image.info().width_px, height = image.info().height_px;
+  const long cell = options.mesh_px;
+  const long band = (options.band_rows + cell - 1) / cell * cell;
+  const long margin = cell;  // fit windows reach at most 40 px beyond a component
+  std::vector<float> buffer;
+  std::vector<DetectedStar> stars;
+  long have_y0 = 0, have_y1 = 0;  // rows in the buffer from the previous band
+  for (long yc = 0; yc < height; yc += band) {
+    Band b;
+    b.y0_abs = std::max(0L, yc - margin);
+    const long y_end = std::min(height, yc + band + margin);
+    b.rows = y_end - b.y0_abs;
+    b.width = width;
+    // The rows shared with the previous band are moved, not decoded again.
+    const long reuse = have_y1 > b.y0_abs && have_y0 <= b.y0_abs ? have_y1 - b.y0_abs : 0;
+    if (reuse > 0)
+      std::copy(buffer.begin() + (b.y0_abs - have_y0) * width, buffer.begin() + (have_y1 - have_y0) * width, buffer.begin());
+    buffer.resize(static_cast<size_t>(b.rows * width));
+    if (b.rows > reuse) image.ReadRowsDirect(b.y0_abs + reuse, b.rows - reuse, buffer.data() + reuse * width);
+    have_y0 = b.y0_abs, have_y1 = y_end;
+    b.raw = buffer.data();
+    b.keep_y0 = yc, b.keep_y1 = std::min(height, yc + band);
+    b.image_height = height;
+    b.high_dn = options.saturation_dn.value_or(image.info().full_scale_dn);
+    b.low_dn = options.floor_dn;
+    ProcessBand(b, options, &stars, stats);
+  }
+  Finish(&stars);
+  return stars;
+}
+
+}  // namespace platemeter

@@ -24,6 +24,10 @@ void RegisterDetectCommand(CLI::App& app, GlobalOptions& global) {
                   "known scan orientation: 0, 90, 180, 270, with m for mirrored (e.g. 90m)");
   cmd->add_flag("--allow-ambiguous-orientation", request->allow_ambiguous,
                 "write results even when the orientation (hence the ids) cannot be decided");
+  cmd->add_flag("--stars", request->stars, "also detect star images (kind star; docs/stars.md)");
+  cmd->add_flag("--bright-stars", request->stars_bright, "stars are brighter than the background (default: dark, a negative)");
+  cmd->add_option("--star-fwhm-px", request->star_fwhm_px, "expected FWHM of a star image in px (default 2.5)")
+      ->check(CLI::Range(0.5, 100.0));
   cmd->add_option("-o,--output", *out_dir, "output folder")->required();
   cmd->callback([request, out_dir, &global] {
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);

@@ -18,6 +18,9 @@ struct DetectRequest {
   std::optional<double> pixel_size_um;  // um; default the TIFF resolution tags
   std::string orientation;              // known orientation ("0", "90m", ...), empty: detect it
   bool allow_ambiguous = false;         // accept an undecided orientation
+  bool stars = false;                   // also detect star images (kind star)
+  bool stars_bright = false;            // stars brighter than the background (a positive); default dark (a negative)
+  double star_fwhm_px = 2.5;            // px; expected FWHM of a star image
 };
 
 struct DetectRun {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -52,6 +53,46 @@ TEST(CliDetect, RefusesToGuessAnOrientation) {
   EXPECT_NE(result.err.find("give --orientation"), std::string::npos) << result.err;
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
   EXPECT_FALSE(std::filesystem::exists(out + "/orbigon.measurements.csv"));
+}
+
+TEST(CliDetect, StarsAreMeasuredAndCrossesAreNotStars) {
+  testing::TempDir dir;
+  const std::string spec =
+      "name = \"stellar\"\ncamera = \"sn004-stellar\"\nseed = 3\n[output]\npixel_size_um = 10.0\n"
+      "[marks.reseau]\npolarity = \"bright\"\ncontrast_dn = 12000.0\n"
+      "[background]\nlevel_dn = 40000.0\n"
+      "[stars]\ncount = 60\nmagnitude_min = 4.0\nmagnitude_max = 7.0\nfwhm_um = 18.0\npolarity = \"dark\"\n"
+      "[noise]\nblur_sigma_um = 4.0\nsensor_sigma_dn = 150.0\n";
+  const DefinitionRegistry registry;
+  sim::SimulatedPlate plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(spec, "spec"), registry);
+  const std::vector<MeasuredPoint> truth = plate.truth;
+  const std::string scan = sim::WriteSimulatedPlate(plate, dir.path().string()).image_path;
+  const std::string out = dir.file("out");
+  const auto result = RunPlatemeter("detect '" + scan + "' --camera sn004-stellar --stars --star-fwhm-px 1.8 -o '" + out + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const MeasurementFile file = ReadMeasurementFile(out + "/stellar.measurements.csv");
+  int truth_stars = 0, found = 0, stars = 0, false_stars = 0;
+  for (const MeasuredPoint& p : file.points) {
+    if (p.kind != PointKind::kStar || p.status != PointStatus::kMeasured) continue;
+    ++stars;
+    bool matched = false;
+    for (const MeasuredPoint& t : truth)
+      if (t.kind == PointKind::kStar && t.x_px && std::hypot(*p.x_px - *t.x_px, *p.y_px - *t.y_px) < 1.0) matched = true;
+    false_stars += !matched;
+  }
+  for (const MeasuredPoint& t : truth) {
+    if (t.kind != PointKind::kStar || !t.x_px) continue;
+    ++truth_stars;
+    for (const MeasuredPoint& p : file.points)
+      if (p.kind == PointKind::kStar && p.status == PointStatus::kMeasured &&
+          std::hypot(*p.x_px - *t.x_px, *p.y_px - *t.y_px) < 1.0) {
+        ++found;
+        break;
+      }
+  }
+  EXPECT_GT(truth_stars, 40);
+  EXPECT_GE(found, 0.9 * truth_stars);
+  EXPECT_EQ(false_stars, 0) << stars << " stars reported";  // the 25 reseau crosses are not stars
 }
 
 TEST(CliDetect, BadInputIsOneLineAndWritesNothing) {

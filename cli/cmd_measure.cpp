@@ -18,6 +18,7 @@
 #include "platemeter/measure/measurement_file.h"
 #include "platemeter/measure/micmac_export.h"
 #include "platemeter/measure/residual_plot.h"
+#include "platemeter/measure/fiducial_orientation.h"
 #include "platemeter/measure/plate_corrections.h"
 
 namespace platemeter::cli {
@@ -34,6 +35,8 @@ struct MeasureArguments {
   double rejection_threshold = 4.0;
   double tolerance_um = 5.0;
   bool no_local = false;
+  bool fiducial_orientation = false;  // reseau cameras: the fiducial step on top of the reseau
+  std::string fiducial_model = "affine";
   std::string second_scan;          // measure: the plate scanned again, rotated 180 deg
   std::string second_orientation;   // its known orientation
   std::string out_dir;
@@ -100,6 +103,35 @@ void AddOptions(CLI::App* cmd, MeasureArguments* args) {
   cmd->add_option("--rejection-threshold", args->rejection_threshold, "normalized residual above which a cross is rejected (4)");
   cmd->add_option("--tolerance-um", args->tolerance_um, "residual tolerance for the out-of-tolerance flags (5 um)");
   cmd->add_option("-o,--output", args->out_dir, "output folder")->required();
+  cmd->add_option("--fiducial-model", args->fiducial_model, "fiducial interior orientation model: similarity, affine (affine)");
+}
+
+// The fiducial interior orientation: fit, per-fiducial residuals and leave-one-out discrepancies.
+nlohmann::json FiducialJson(const FiducialOrientation& o) {
+  nlohmann::json j;
+  const ReseauFit& f = o.fit;
+  j["model"] = ReseauFitModelName(f.model);
+  j["fiducials"] = {{"used", f.used}, {"rejected", f.rejected}};
+  j["sigma0"] = f.sigma0;
+  j["rms_um"] = f.rms_mm * 1e3;
+  nlohmann::json params = nlohmann::json::object();
+  const std::vector<std::string> names = f.ParameterNames();
+  for (size_t k = 0; k < names.size(); ++k) {
+    params[names[k]] = {{"value", f.parameters[k]}, {"sigma", std::sqrt(f.covariance[9 * k])}};
+  }
+  j["parameters"] = params;
+  nlohmann::json rows = nlohmann::json::array();
+  for (size_t i = 0; i < o.observations.size(); ++i) {
+    rows.push_back({{"id", o.observations[i].id},
+                    {"camera_x_mm", o.observations[i].grid_x_mm},
+                    {"camera_y_mm", o.observations[i].grid_y_mm},
+                    {"residual_x_um", f.residual_x_mm[i] * 1e3},
+                    {"residual_y_um", f.residual_y_mm[i] * 1e3},
+                    {"leave_one_out_sigmas", o.leave_one_out[i]},
+                    {"rejected", static_cast<bool>(f.is_rejected[i])}});
+  }
+  j["residuals"] = rows;
+  return j;
 }
 
 struct Prepared {
@@ -112,8 +144,11 @@ struct Prepared {
 Prepared Prepare(const MeasureArguments& args, const DefinitionRegistry& registry, bool local) {
   Prepared p;
   const CameraDefinition& camera = registry.Camera(args.detect.camera);
-  if (camera.grid.empty()) throw Error("camera '" + camera.name + "'", "has no reseau grid to correct with");
-  p.grid = &registry.Grid(camera.grid);
+  if (camera.grid.empty() && (!local || (camera.fiducial_set.empty() && !camera.format_corners_as_fiducials))) {
+    throw Error("camera '" + camera.name + "'", local ? "has neither a reseau grid nor fiducials to correct with"
+                                                      : "has no reseau grid to validate");
+  }
+  if (!camera.grid.empty()) p.grid = &registry.Grid(camera.grid);
   const std::filesystem::path scan(args.detect.scan);
   if (scan.extension() == ".csv") {
     p.file = ReadMeasurementFile(args.detect.scan);
@@ -128,8 +163,8 @@ Prepared Prepare(const MeasureArguments& args, const DefinitionRegistry& registr
   o.pixel_size_um = args.detect.pixel_size_um;
   if (!args.detect.orientation.empty()) o.orientation = args.detect.orientation;
   o.temperature_degC = args.temperature_degC;
-  o.calibration_temperature_degC =
-      camera.calibration_temperature_degC.value_or(p.grid->calibration_temperature_degC.value_or(20.0));
+  o.calibration_temperature_degC = camera.calibration_temperature_degC.value_or(
+      p.grid ? p.grid->calibration_temperature_degC.value_or(20.0) : 20.0);
   o.expansion_per_degC = camera.glass_expansion_per_degC;
   o.emulsion.depth_um = args.emulsion_depth_um.value_or(0.0);
   o.emulsion.refractive_index = args.refractive_index;
@@ -141,6 +176,14 @@ Prepared Prepare(const MeasureArguments& args, const DefinitionRegistry& registr
   }
   o.fit.rejection_threshold = args.rejection_threshold;
   o.local_reseau = local && !args.no_local;
+  o.fiducial_orientation = args.fiducial_orientation;
+  o.fiducials = CalibratedFiducials(camera, camera.fiducial_set.empty() ? nullptr : &registry.Fiducials(camera.fiducial_set));
+  o.fiducial_source = camera.fiducial_set;
+  if (camera.format_corners_as_fiducials) o.fiducial_source += (o.fiducial_source.empty() ? "" : "+") + std::string("format_corners");
+  if (!ParseReseauFitModel(args.fiducial_model, &o.fiducial.model) ||
+      (o.fiducial.model != ReseauFitModel::kSimilarity && o.fiducial.model != ReseauFitModel::kAffine)) {
+    throw Error("--fiducial-model", "'" + args.fiducial_model + "' is not one of similarity, affine");
+  }
   return p;
 }
 
@@ -152,12 +195,17 @@ void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global) {
   AddOptions(cmd, args.get());
   cmd->add_option("--emulsion-depth-um", args->emulsion_depth_um, "depth of the image centroid in the emulsion (0: no correction)");
   cmd->add_flag("--no-local-reseau", args->no_local, "skip the bilinear local reseau correction");
+  cmd->add_flag("--fiducial-orientation", args->fiducial_orientation,
+                "reseau cameras: also fit the fiducials and map every point into their frame (fiducial-only cameras always)");
   cmd->add_option("--second-scan", args->second_scan, "the plate scanned a second time (rotated 180 deg): both corrected, then meaned");
   cmd->add_option("--second-orientation", args->second_orientation, "the second scan's known orientation (e.g. 180)");
   cmd->callback([args, &global] {
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
     Prepared p = Prepare(*args, registry, true);
-    const PlateCorrectionReport report = CorrectPlate(&p.file, *p.grid, p.options);
+    auto correct = [](Prepared& x) {
+      return x.grid ? CorrectPlate(&x.file, *x.grid, x.options) : CorrectFiducialPlate(&x.file, x.options);
+    };
+    const PlateCorrectionReport report = correct(p);
     std::optional<PlateCorrectionReport> second_report;
     std::optional<DoubleMeasurementReport> double_report;
     if (!args->second_scan.empty()) {
@@ -165,7 +213,7 @@ void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global) {
       second.detect.scan = args->second_scan;
       second.detect.orientation = args->second_orientation;
       Prepared q = Prepare(second, registry, true);
-      second_report = CorrectPlate(&q.file, *q.grid, q.options);
+      second_report = correct(q);
       double_report = MeanDoubleMeasurement(&p.file, q.file);
       std::cout << "double measurement: " << double_report->paired << " points paired, rms discrepancy "
                 << double_report->rms_discrepancy_mm * 1e3 << " um (" << double_report->rms_normalized
@@ -179,13 +227,15 @@ void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global) {
     const std::string xml = (dir / (p.stem + ".micmac.xml")).string();
     WriteMeasurementFile(csv, p.file);
     WriteMicMacMeasures(xml, p.file);
-    ResidualPlotOptions plot;
-    plot.tolerance_um = args->tolerance_um;
-    WriteResidualPlotPng(png, report.observations, report.fit, plot);
+    if (p.grid) {
+      ResidualPlotOptions plot;
+      plot.tolerance_um = args->tolerance_um;
+      WriteResidualPlotPng(png, report.observations, report.fit, plot);
+    }
     nlohmann::json j;
     j["scan"] = args->detect.scan;
     j["camera"] = args->detect.camera;
-    j["grid"] = p.grid->name;
+    if (p.grid) j["grid"] = p.grid->name;
     j["corrections"] = nlohmann::json::array();
     for (const AppliedCorrection& c : p.file.header.corrections) {
       nlohmann::json params = nlohmann::json::object();
@@ -193,11 +243,13 @@ void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global) {
       j["corrections"].push_back({{"name", c.name}, {"parameters", params}});
     }
     j["points_corrected"] = report.points_corrected;
-    j["reseau"] = ValidationJson(report, args->tolerance_um);
+    if (p.grid) j["reseau"] = ValidationJson(report, args->tolerance_um);
+    if (report.fiducial) j["fiducial_orientation"] = FiducialJson(*report.fiducial);
     if (double_report) {
       nlohmann::json d;
       d["second_scan"] = args->second_scan;
-      d["second_reseau"] = ValidationJson(*second_report, args->tolerance_um);
+      if (p.grid) d["second_reseau"] = ValidationJson(*second_report, args->tolerance_um);
+      if (second_report->fiducial) d["second_fiducial_orientation"] = FiducialJson(*second_report->fiducial);
       d["paired"] = double_report->paired;
       d["first_only"] = double_report->only_first;
       d["second_only"] = double_report->only_second;
@@ -212,9 +264,18 @@ void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global) {
       j["double_measurement"] = d;
     }
     WriteFileAtomically(json, j.dump(2) + "\n");
-    std::cout << "reseau fit (" << ReseauFitModelName(report.fit.model) << "): " << report.fit.used << " crosses, "
-              << report.fit.rejected << " rejected, rms " << report.fit.rms_mm * 1e3 << " um\n"
-              << csv << "\n" << json << "\n" << png << "\n" << xml << "\n";
+    if (p.grid) {
+      std::cout << "reseau fit (" << ReseauFitModelName(report.fit.model) << "): " << report.fit.used << " crosses, "
+                << report.fit.rejected << " rejected, rms " << report.fit.rms_mm * 1e3 << " um\n";
+    }
+    if (report.fiducial) {
+      const ReseauFit& f = report.fiducial->fit;
+      std::cout << "fiducial orientation (" << ReseauFitModelName(f.model) << "): " << f.used << " fiducials, "
+                << f.rejected << " rejected, rms " << f.rms_mm * 1e3 << " um, sigma0 " << f.sigma0 << "\n";
+    }
+    std::cout << csv << "\n" << json << "\n";
+    if (p.grid) std::cout << png << "\n";
+    std::cout << xml << "\n";
   });
 
   auto vargs = std::make_shared<MeasureArguments>();

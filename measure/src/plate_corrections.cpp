@@ -26,6 +26,7 @@ PlanePoint PixelPoint(const MeasuredPoint& p) {
 
 bool PlateCorrectionOptions::Check(std::string* why) const {
   if (!fit.Check(why)) return false;
+  if (!fiducial.Check(why)) return false;
   if (temperature_degC) {
     ThermalCorrection t{true, *temperature_degC, calibration_temperature_degC, expansion_per_degC};
     if (!t.Check(why)) return false;
@@ -35,28 +36,43 @@ bool PlateCorrectionOptions::Check(std::string* why) const {
   return e.Check(why);
 }
 
-PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid, const PlateCorrectionOptions& options) {
-  const std::string subject = file->header.plate_id.empty() ? "measurement file" : file->header.plate_id;
+namespace {
+
+// The comparator and thermal steps from the options and the file header.
+void SetUpEarlySteps(MeasurementFile* file, const PlateCorrectionOptions& options, const std::string& subject,
+                     PlateCorrectionReport* report) {
   std::string why;
   if (!options.Check(&why)) throw Error(subject, why);
-  PlateCorrectionReport report;
-
-  // Pixel -> comparator.
-  report.comparator.pixel_size_um = options.pixel_size_um.value_or(file->header.pixel_size_um.value_or(0.0));
+  report->comparator.pixel_size_um = options.pixel_size_um.value_or(file->header.pixel_size_um.value_or(0.0));
   std::string orientation = "0";
   for (const auto& [key, value] : file->header.extra) {
     if (key == "orientation") orientation = value;
   }
   if (options.orientation) orientation = *options.orientation;
-  if (!ParseOrientationName(orientation, &report.comparator.orientation_deg, &report.comparator.mirrored)) {
+  if (!ParseOrientationName(orientation, &report->comparator.orientation_deg, &report->comparator.mirrored)) {
     throw Error(subject, "unknown scan orientation '" + orientation + "'");
   }
-  if (!report.comparator.Check(&why)) throw Error(subject, why + " (give the pixel size)");
+  if (!report->comparator.Check(&why)) throw Error(subject, why + " (give the pixel size)");
 
-  report.thermal.enabled = options.temperature_degC.has_value();
-  report.thermal.temperature_degC = options.temperature_degC.value_or(options.calibration_temperature_degC);
-  report.thermal.calibration_temperature_degC = options.calibration_temperature_degC;
-  report.thermal.expansion_per_degC = options.expansion_per_degC;
+  report->thermal.enabled = options.temperature_degC.has_value();
+  report->thermal.temperature_degC = options.temperature_degC.value_or(options.calibration_temperature_degC);
+  report->thermal.calibration_temperature_degC = options.calibration_temperature_degC;
+  report->thermal.expansion_per_degC = options.expansion_per_degC;
+}
+
+void WriteMm(const PlanePoint& q, MeasuredPoint* p) {
+  p->x_mm = q.x;
+  p->y_mm = q.y;
+  p->sigma_x_mm = std::sqrt(q.cov.xx);
+  p->sigma_y_mm = std::sqrt(q.cov.yy);
+}
+
+}  // namespace
+
+PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid, const PlateCorrectionOptions& options) {
+  const std::string subject = file->header.plate_id.empty() ? "measurement file" : file->header.plate_id;
+  PlateCorrectionReport report;
+  SetUpEarlySteps(file, options, subject, &report);
 
   auto early = [&](const MeasuredPoint& p) { return report.thermal.Apply(report.comparator.Apply(PixelPoint(p))); };
 
@@ -109,6 +125,8 @@ PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid
 
   std::map<size_t, size_t> observation_of_row;
   for (size_t i = 0; i < observation_row.size(); ++i) observation_of_row[observation_row[i]] = i;
+  std::vector<PlanePoint> positions(file->points.size());
+  std::vector<bool> has_position(file->points.size(), false);
   for (size_t k = 0; k < file->points.size(); ++k) {
     MeasuredPoint& p = file->points[k];
     if (!Usable(p)) continue;
@@ -122,11 +140,21 @@ PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid
     } else if (options.local_reseau) {
       q = local.Apply(q, &p.flags);
     }
-    p.x_mm = q.x;
-    p.y_mm = q.y;
-    p.sigma_x_mm = std::sqrt(q.cov.xx);
-    p.sigma_y_mm = std::sqrt(q.cov.yy);
+    positions[k] = q;
+    has_position[k] = true;
     ++report.points_corrected;
+  }
+
+  // Optionally the fiducial interior orientation on top (reseau cameras).
+  if (options.fiducial_orientation) {
+    try {
+      report.fiducial = ApplyFiducialOrientation(file, &positions, has_position, options.fiducials, options.fiducial);
+    } catch (const Error& e) {
+      throw Error(subject, e.what());
+    }
+  }
+  for (size_t k = 0; k < file->points.size(); ++k) {
+    if (has_position[k]) WriteMm(positions[k], &file->points[k]);
   }
 
   // The header, in application order.
@@ -146,6 +174,54 @@ PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid
   fit.parameters.push_back({"crosses_rejected", std::to_string(report.fit.rejected)});
   corrections.push_back(fit);
   if (options.local_reseau) corrections.push_back({"local_reseau", {{"interpolation", "bilinear"}}});
+  if (report.fiducial) corrections.push_back(report.fiducial->Record(options.fiducial_source));
+  return report;
+}
+
+PlateCorrectionReport CorrectFiducialPlate(MeasurementFile* file, const PlateCorrectionOptions& options) {
+  const std::string subject = file->header.plate_id.empty() ? "measurement file" : file->header.plate_id;
+  PlateCorrectionReport report;
+  SetUpEarlySteps(file, options, subject, &report);
+  std::vector<PlanePoint> positions(file->points.size());
+  std::vector<bool> has_position(file->points.size(), false);
+  for (size_t k = 0; k < file->points.size(); ++k) {
+    const MeasuredPoint& p = file->points[k];
+    if (!Usable(p)) continue;
+    positions[k] = report.thermal.Apply(report.comparator.Apply(PixelPoint(p)));
+    has_position[k] = true;
+  }
+  try {
+    // Emulsion depth about the principal point, placed in the comparator
+    // frame by a preliminary similarity fit of the fiducials (on a scratch copy).
+    report.emulsion.enabled = options.emulsion.depth_um > 0.0;
+    report.emulsion.model = options.emulsion;
+    if (report.emulsion.enabled) {
+      MeasurementFile scratch = *file;
+      std::vector<PlanePoint> scratch_positions = positions;
+      FiducialOrientationOptions similarity = options.fiducial;
+      similarity.model = ReseauFitModel::kSimilarity;
+      const FiducialOrientation pre =
+          ApplyFiducialOrientation(&scratch, &scratch_positions, has_position, options.fiducials, similarity);
+      pre.fit.Forward(options.principal_point_x_mm, options.principal_point_y_mm, &report.emulsion.centre_x_mm,
+                      &report.emulsion.centre_y_mm);
+      for (size_t k = 0; k < positions.size(); ++k) {
+        if (has_position[k]) positions[k] = report.emulsion.Apply(positions[k]);
+      }
+    }
+    report.fiducial = ApplyFiducialOrientation(file, &positions, has_position, options.fiducials, options.fiducial);
+  } catch (const Error& e) {
+    throw Error(subject, e.what());
+  }
+  for (size_t k = 0; k < file->points.size(); ++k) {
+    if (!has_position[k]) continue;
+    WriteMm(positions[k], &file->points[k]);
+    ++report.points_corrected;
+  }
+  auto& corrections = file->header.corrections;
+  corrections.push_back(report.comparator.Record());
+  if (report.thermal.enabled) corrections.push_back(report.thermal.Record());
+  if (report.emulsion.enabled) corrections.push_back(report.emulsion.Record());
+  corrections.push_back(report.fiducial->Record(options.fiducial_source));
   return report;
 }
 

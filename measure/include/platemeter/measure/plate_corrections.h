@@ -10,6 +10,7 @@
 
 #include "platemeter/grids/definitions.h"
 #include "platemeter/measure/corrections.h"
+#include "platemeter/measure/fiducial_orientation.h"
 #include "platemeter/measure/measurement_file.h"
 #include "platemeter/measure/reseau_fit.h"
 
@@ -25,6 +26,14 @@ struct PlateCorrectionOptions {
   double principal_point_x_mm = 0.0, principal_point_y_mm = 0.0;  // mm; grid frame, centre of the radial model
   ReseauFitOptions fit;
   bool local_reseau = true;                    // bilinear correction of every non-reseau point
+  // The fiducial interior orientation. CorrectFiducialPlate always applies it;
+  // CorrectPlate (reseau cameras) only when fiducial_orientation is set: the
+  // fiducials' reseau-corrected positions are then fitted to `fiducials` and
+  // every point is mapped into that frame.
+  bool fiducial_orientation = false;
+  std::vector<CalibratedFiducial> fiducials;   // calibrated camera positions (CalibratedFiducials)
+  std::string fiducial_source;                 // recorded in the header (no spaces), e.g. "format_corners"
+  FiducialOrientationOptions fiducial;
   bool Check(std::string* why) const;
 };
 
@@ -38,9 +47,18 @@ struct PlateCorrectionReport {
   // its sigma; meaningful when the emulsion correction was off.
   ValueSigma emulsion_depth_reading_um;
   int points_corrected = 0;
+  std::optional<FiducialOrientation> fiducial;  // when the fiducial step ran
 };
 
 // Throws Error(plate id, reason) without a pixel size or with too few crosses.
 PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid, const PlateCorrectionOptions& options);
+
+// Cameras without a reseau: pixel -> comparator -> thermal (when a
+// temperature is given) -> emulsion depth (when a depth is given; the
+// principal point, in camera mm, placed by a preliminary similarity fit of
+// the fiducials) -> fiducial interior orientation into camera mm
+// (options.fiducials). The reseau steps do not apply.
+// Throws Error(plate id, reason) without a pixel size or with too few fiducials.
+PlateCorrectionReport CorrectFiducialPlate(MeasurementFile* file, const PlateCorrectionOptions& options);
 
 }  // namespace platemeter

@@ -44,13 +44,11 @@ struct MeasureArguments {
 
 nlohmann::json Vs(const ValueSigma& v) { return {{"value", v.value}, {"sigma", v.sigma}}; }
 
-// The reseau validation: per-cross residuals, RMS, the decomposed linear part
-// with sigmas, the scale discrepancy and its reading as an emulsion depth, flags.
-nlohmann::json ValidationJson(const PlateCorrectionReport& r, double tolerance_um) {
+// What every fit report starts with: model, counts (under `counted`), sigma0, RMS, parameters with sigmas.
+nlohmann::json FitJson(const ReseauFit& f, const char* counted) {
   nlohmann::json j;
-  const ReseauFit& f = r.fit;
   j["model"] = ReseauFitModelName(f.model);
-  j["crosses"] = {{"used", f.used}, {"rejected", f.rejected}};
+  j[counted] = {{"used", f.used}, {"rejected", f.rejected}};
   j["sigma0"] = f.sigma0;
   j["rms_um"] = f.rms_mm * 1e3;
   nlohmann::json params = nlohmann::json::object();
@@ -59,6 +57,14 @@ nlohmann::json ValidationJson(const PlateCorrectionReport& r, double tolerance_u
     params[names[k]] = {{"value", f.parameters[k]}, {"sigma", std::sqrt(f.covariance[9 * k])}};
   }
   j["parameters"] = params;
+  return j;
+}
+
+// The reseau validation: per-cross residuals, RMS, the decomposed linear part
+// with sigmas, the scale discrepancy and its reading as an emulsion depth, flags.
+nlohmann::json ValidationJson(const PlateCorrectionReport& r, double tolerance_um) {
+  const ReseauFit& f = r.fit;
+  nlohmann::json j = FitJson(f, "crosses");
   j["scale_x"] = Vs(f.scale_x);
   j["scale_y"] = Vs(f.scale_y);
   j["mean_scale"] = Vs(f.mean_scale);
@@ -108,18 +114,8 @@ void AddOptions(CLI::App* cmd, MeasureArguments* args) {
 
 // The fiducial interior orientation: fit, per-fiducial residuals and leave-one-out discrepancies.
 nlohmann::json FiducialJson(const FiducialOrientation& o) {
-  nlohmann::json j;
   const ReseauFit& f = o.fit;
-  j["model"] = ReseauFitModelName(f.model);
-  j["fiducials"] = {{"used", f.used}, {"rejected", f.rejected}};
-  j["sigma0"] = f.sigma0;
-  j["rms_um"] = f.rms_mm * 1e3;
-  nlohmann::json params = nlohmann::json::object();
-  const std::vector<std::string> names = f.ParameterNames();
-  for (size_t k = 0; k < names.size(); ++k) {
-    params[names[k]] = {{"value", f.parameters[k]}, {"sigma", std::sqrt(f.covariance[9 * k])}};
-  }
-  j["parameters"] = params;
+  nlohmann::json j = FitJson(f, "fiducials");
   nlohmann::json rows = nlohmann::json::array();
   for (size_t i = 0; i < o.observations.size(); ++i) {
     rows.push_back({{"id", o.observations[i].id},

@@ -1,9 +1,12 @@
 // The comparator corrections before the reseau fit (corrections.h).
 #include "platemeter/measure/corrections.h"
 
+#include <array>
 #include <cmath>
 
 #include <fmt/format.h>
+
+#include "platemeter/detect/grid_assignment.h"
 
 namespace platemeter {
 namespace {
@@ -24,36 +27,17 @@ Covariance2 Covariance2::Transformed(const double j[4]) const {
   return {a * j[0] + b * j[1], a * j[2] + b * j[3], c * j[2] + d * j[3]};
 }
 
-bool ParseOrientationName(const std::string& name, int* orientation_deg, bool* mirrored) {
-  std::string digits = name;
-  bool m = false;
-  if (!digits.empty() && digits.back() == 'm') {
-    m = true;
-    digits.pop_back();
-  }
-  if (digits != "0" && digits != "90" && digits != "180" && digits != "270") return false;
-  *orientation_deg = std::stoi(digits);
-  *mirrored = m;
-  return true;
-}
-
 // ---- comparator
 
 void ComparatorCorrection::Jacobian(double j[4]) const {
+  // Pixels come from plate axes through detect's axis map A (orthogonal, 0/+-1);
+  // back to plate mm: A^T times the pixel size.
   const double p_mm = pixel_size_um * 1e-3;
-  // Scan frame: (col p, -row p). Then R(-orientation), then the mirror (x reversed).
-  double r[4];
-  switch (((orientation_deg % 360) + 360) % 360) {
-    case 90: r[0] = 0; r[1] = 1; r[2] = -1; r[3] = 0; break;
-    case 180: r[0] = -1; r[1] = 0; r[2] = 0; r[3] = -1; break;
-    case 270: r[0] = 0; r[1] = -1; r[2] = 1; r[3] = 0; break;
-    default: r[0] = 1; r[1] = 0; r[2] = 0; r[3] = 1; break;
-  }
-  const double mx = mirrored ? -1.0 : 1.0;
-  j[0] = mx * r[0] * p_mm;
-  j[1] = -mx * r[1] * p_mm;
-  j[2] = r[2] * p_mm;
-  j[3] = -r[3] * p_mm;
+  const std::array<int, 4> a = ScanOrientation{orientation_deg, mirrored}.PixelAxesFromPlate();
+  j[0] = a[0] * p_mm;
+  j[1] = a[2] * p_mm;
+  j[2] = a[1] * p_mm;
+  j[3] = a[3] * p_mm;
 }
 
 PlanePoint ComparatorCorrection::Apply(const PlanePoint& px) const {

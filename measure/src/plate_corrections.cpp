@@ -1,6 +1,8 @@
 // The comparator corrections end to end (plate_corrections.h).
 #include "platemeter/measure/plate_corrections.h"
 
+#include "platemeter/detect/grid_assignment.h"
+
 #include <cmath>
 #include <map>
 
@@ -18,7 +20,7 @@ bool Usable(const MeasuredPoint& p) {
   return p.status == PointStatus::kMeasured && p.x_px && p.y_px && p.sigma_x_px && p.sigma_y_px;
 }
 
-PlanePoint PixelPoint(const MeasuredPoint& p) {
+PlanePoint PlanePointFromPixels(const MeasuredPoint& p) {
   return {*p.x_px, *p.y_px, {*p.sigma_x_px * *p.sigma_x_px, 0.0, *p.sigma_y_px * *p.sigma_y_px}};
 }
 
@@ -49,9 +51,12 @@ void SetUpEarlySteps(MeasurementFile* file, const PlateCorrectionOptions& option
     if (key == "orientation") orientation = value;
   }
   if (options.orientation) orientation = *options.orientation;
-  if (!ParseOrientationName(orientation, &report->comparator.orientation_deg, &report->comparator.mirrored)) {
+  ScanOrientation scan_orientation;
+  if (!ParseScanOrientation(orientation, &scan_orientation)) {
     throw Error(subject, "unknown scan orientation '" + orientation + "'");
   }
+  report->comparator.orientation_deg = scan_orientation.rotation_deg;
+  report->comparator.mirrored = scan_orientation.mirrored;
   if (!report->comparator.Check(&why)) throw Error(subject, why + " (give the pixel size)");
 
   report->thermal.enabled = options.temperature_degC.has_value();
@@ -74,7 +79,7 @@ PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid
   PlateCorrectionReport report;
   SetUpEarlySteps(file, options, subject, &report);
 
-  auto early = [&](const MeasuredPoint& p) { return report.thermal.Apply(report.comparator.Apply(PixelPoint(p))); };
+  auto early = [&](const MeasuredPoint& p) { return report.thermal.Apply(report.comparator.Apply(PlanePointFromPixels(p))); };
 
   // The crosses after comparator + thermal; a preliminary similarity fit
   // places the principal point in the comparator frame for the radial model.
@@ -187,7 +192,7 @@ PlateCorrectionReport CorrectFiducialPlate(MeasurementFile* file, const PlateCor
   for (size_t k = 0; k < file->points.size(); ++k) {
     const MeasuredPoint& p = file->points[k];
     if (!Usable(p)) continue;
-    positions[k] = report.thermal.Apply(report.comparator.Apply(PixelPoint(p)));
+    positions[k] = report.thermal.Apply(report.comparator.Apply(PlanePointFromPixels(p)));
     has_position[k] = true;
   }
   try {

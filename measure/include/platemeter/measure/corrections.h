@@ -65,7 +65,4 @@ struct EmulsionDepthCorrection {
   bool Check(std::string* why) const;
 };
 
-// Parses detect's orientation name ("0", "90", "180", "270", with "m" when mirrored).
-bool ParseOrientationName(const std::string& name, int* orientation_deg, bool* mirrored);
-
 }  // namespace platemeter

@@ -28,8 +28,27 @@ void RegisterDetectCommand(CLI::App& app, GlobalOptions& global) {
   cmd->add_flag("--bright-stars", request->stars_bright, "stars are brighter than the background (default: dark, a negative)");
   cmd->add_option("--star-fwhm-px", request->star_fwhm_px, "expected FWHM of a star image in px (default 2.5)")
       ->check(CLI::Range(0.5, 100.0));
+  // Duty-cycle trails (seed 001): giving the start time switches them on.
+  auto trails = std::make_shared<TrailRequest>();
+  cmd->add_option("--trails-start-utc", trails->start_utc,
+                  "link star images into duty-cycle trails; ISO 8601 UTC of the plate's first shutter opening");
+  cmd->add_option("--trail-dashes", trails->leading_dashes, "leading dashes per trail in exposure order (default 2,3,4,5)")
+      ->delimiter(',');
+  cmd->add_option("--trail-break-s", trails->break_s, "break between trails in s (default 480)");
+  // Passpoints: giving the mark's diameter switches them on.
+  auto passpoints = std::make_shared<PasspointRequest>();
+  cmd->add_option("--passpoint-diameter-um", passpoints->diameter_um, "measure passpoints: outer diameter of the mark in um")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--passpoint-shape", passpoints->shape, "dot or ring (default dot)")->check(CLI::IsMember({"dot", "ring"}));
+  cmd->add_option("--passpoint-line-width-um", passpoints->line_width_um, "ring line width in um");
+  cmd->add_option("--passpoint-polarity", passpoints->polarity, "dark or bright (default dark)")
+      ->check(CLI::IsMember({"dark", "bright"}));
+  cmd->add_option("--passpoints", passpoints->list_file,
+                  "approximate passpoint positions (CSV id,x_px,y_px; docs/passpoints.md); default: find and number them");
   cmd->add_option("-o,--output", *out_dir, "output folder")->required();
-  cmd->callback([request, out_dir, &global] {
+  cmd->callback([request, out_dir, trails, passpoints, cmd, &global] {
+    if (cmd->count("--trails-start-utc")) request->trails = *trails;
+    if (cmd->count("--passpoint-diameter-um")) request->passpoints = *passpoints;
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
     const DetectRun run = RunDetection(*request, registry);
     std::filesystem::create_directories(*out_dir);

@@ -2,16 +2,17 @@
 // `platemeter detect`, shared with `platemeter measure`.
 #include "detect_run.h"
 
+#include "detect_stages.h"
+
 #include <filesystem>
 #include <optional>
-#include <sstream>
+#include <utility>
 
 #include "platemeter/core/error.h"
 #include "platemeter/core/image.h"
 #include "platemeter/core/version.h"
 #include "platemeter/detect/fiducial_detector.h"
 #include "platemeter/detect/reseau_detector.h"
-#include "platemeter/detect/star_detector.h"
 #include "platemeter/measure/sha256.h"
 
 namespace platemeter::cli {
@@ -21,7 +22,6 @@ namespace {
 struct Detections {
   std::optional<ReseauDetection> reseau;
   std::optional<FiducialDetection> fiducials;
-  std::optional<std::vector<DetectedStar>> stars;
   ScanOrientation orientation;
   int polarity = -1;
 };
@@ -54,23 +54,6 @@ MeasurementFile ToMeasurementFile(const Detections& detections, const std::strin
     if (!p.reason.empty()) row.flags.push_back(std::string(PointStatusName(p.status)) + ":" + p.reason);
     file.points.push_back(row);
   }
-  if (detections.stars) {
-    for (const DetectedStar& star : *detections.stars) {
-      MeasuredPoint row;
-      row.id = star.point.id;
-      row.kind = PointKind::kStar;
-      row.status = star.point.status;
-      row.x_px = star.point.position_px.x_px;
-      row.y_px = star.point.position_px.y_px;
-      row.sigma_x_px = star.point.sigma_x_px;
-      row.sigma_y_px = star.point.sigma_y_px;
-      std::stringstream names(StarFlagNames(star.flags));
-      for (std::string name; std::getline(names, name, ',');)
-        if (!name.empty()) row.flags.push_back(name);
-      if (!star.point.reason.empty()) row.flags.push_back(std::string(PointStatusName(star.point.status)) + ":" + star.point.reason);
-      file.points.push_back(row);
-    }
-  }
   return file;
 }
 
@@ -96,14 +79,6 @@ nlohmann::json SummaryJson(const Detections& detections, const std::string& scan
                       {"assignment", d.seconds_assignment}, {"refinement", d.seconds_refinement}};
     r["summary"] = d.summary;
     j["reseau"] = r;
-  }
-  if (detections.stars) {
-    int measured = 0, rejected = 0;
-    for (const DetectedStar& star : *detections.stars) {
-      measured += star.point.status == PointStatus::kMeasured;
-      rejected += star.point.status == PointStatus::kRejected;
-    }
-    j["stars"] = {{"measured", measured}, {"rejected", rejected}};
   }
   if (detections.fiducials) {
     const FiducialDetection& f = *detections.fiducials;
@@ -171,26 +146,29 @@ DetectRun RunDetection(const DetectRequest& request, const DefinitionRegistry& r
       detections.orientation = detections.fiducials->orientation;
     }
   }
-  if (request.stars) {
-    StarDetectorOptions options;
-    options.dark = !request.stars_bright;
-    options.psf_fwhm_px = request.star_fwhm_px;
-    if (detections.reseau) {
-      // Crosses are not stars: mask every cross found, out to half its arm.
-      for (const DetectedPoint& p : detections.reseau->points)
-        if (p.status != PointStatus::kMissing) options.mask_px.push_back(p.position_px);
-      const MasterGrid& grid = registry.Grid(grid_name);
-      options.mask_radius_px = 0.5 * grid.mark.arm_length_um / pixel_size_um + 3.0;
-    }
-    detections.stars = DetectStars(image, options);
-  }
+  const DetectContext context{.request = request,
+                              .registry = registry,
+                              .image = image,
+                              .pixel_size_um = pixel_size_um,
+                              .camera = camera,
+                              .grid = grid_name.empty() ? nullptr : &registry.Grid(grid_name),
+                              .reseau = detections.reseau ? &*detections.reseau : nullptr,
+                              .fiducials = detections.fiducials ? &*detections.fiducials : nullptr,
+                              .orientation = detections.orientation};
+  std::vector<std::pair<std::string, StageOutput>> stages;
+  if (request.stars || request.trails) stages.emplace_back("stars", RunStarStage(context));
+  if (request.passpoints) stages.emplace_back("passpoints", RunPasspointStage(context));
   DetectRun run;
   run.file = ToMeasurementFile(detections, request.scan, request.camera, pixel_size_um);
   run.summary = SummaryJson(detections, request.scan, grid_name);
   run.grid_name = grid_name;
   if (detections.reseau) run.messages += "reseau: " + detections.reseau->summary + "\n";
   if (detections.fiducials) run.messages += "fiducials: " + detections.fiducials->summary + "\n";
-  if (detections.stars) run.messages += "stars: " + std::to_string(detections.stars->size()) + " images\n";
+  for (auto& [key, stage] : stages) {
+    run.file.points.insert(run.file.points.end(), stage.rows.begin(), stage.rows.end());
+    run.summary[key] = std::move(stage.summary);
+    run.messages += key + ": " + stage.message + "\n";
+  }
   return run;
 }
 

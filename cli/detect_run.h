@@ -1,15 +1,32 @@
 #pragma once
-// Running the reseau and fiducial detectors on a scan into a measurement file
+// Running the detectors (reseau, fiducials, stars and trails, passpoints) on a scan into a measurement file
 // and a JSON summary: shared by `platemeter detect` and `platemeter measure`.
 #include <nlohmann/json.hpp>
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "platemeter/grids/registry.h"
 #include "platemeter/measure/measurement_file.h"
 
 namespace platemeter::cli {
+
+// The duty-cycle program of a stellar plate (seed 001 Table 1; core/duty_cycle.h).
+struct TrailRequest {
+  std::string start_utc;                      // ISO 8601 UTC of the plate's first shutter opening (required)
+  std::vector<int> leading_dashes{2, 3, 4, 5};  // leading dash count per trail, in exposure order
+  double break_s = 480.0;                     // s; break between trails (7-10 min)
+};
+
+// Marked passpoints (dots or rings) to measure.
+struct PasspointRequest {
+  std::string list_file;         // approximate positions (docs/passpoints.md); empty: find all, number them P1, P2, ...
+  std::string shape = "dot";     // dot | ring
+  double diameter_um = 0.0;      // um; outer diameter of the mark (required)
+  double line_width_um = 0.0;    // um; ring line width (rings only)
+  std::string polarity = "dark";  // dark | bright: the mark against its surroundings
+};
 
 struct DetectRequest {
   std::string scan;
@@ -21,10 +38,12 @@ struct DetectRequest {
   bool stars = false;                   // also detect star images (kind star)
   bool stars_bright = false;            // stars brighter than the background (a positive); default dark (a negative)
   double star_fwhm_px = 2.5;            // px; expected FWHM of a star image
+  std::optional<TrailRequest> trails;   // link star images into duty-cycle trails (implies stars)
+  std::optional<PasspointRequest> passpoints;  // measure passpoints
 };
 
 struct DetectRun {
-  MeasurementFile file;     // kinds reseau/fiducial, pixel columns filled
+  MeasurementFile file;     // every kind found, pixel columns filled
   nlohmann::json summary;   // as detect's <scan>.detect.json
   std::string grid_name;    // the grid searched ("" without a reseau)
   std::string messages;     // one line per detector, for the console

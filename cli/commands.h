@@ -19,5 +19,6 @@ void RegisterGridsCommand(CLI::App& app, GlobalOptions& global);
 void RegisterSimulateCommand(CLI::App& app, GlobalOptions& global);
 void RegisterDetectCommand(CLI::App& app, GlobalOptions& global);
 void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global);  // measure and validate
+void RegisterBatchCommand(CLI::App& app, GlobalOptions& global);    // batch: whole archives (docs/batch.md)
 
 }  // namespace platemeter::cli

@@ -1,10 +1,95 @@
-// The star stage of RunDetection (detect_stages.h): star images (kind star).
+// The star stage of RunDetection (detect_stages.h): star images (kind star)
+// and, when the plate's duty-cycle program is given, its trails (kinds
+// trail_dot and trail_dash, with star, trail, dot and mid-exposure time).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
 #include <sstream>
 
 #include "detect_stages.h"
+#include "platemeter/calib/apparent_place.h"
+#include "platemeter/core/error.h"
 #include "platemeter/detect/star_detector.h"
+#include "platemeter/detect/trail_linker.h"
 
 namespace platemeter::cli {
+namespace {
+
+constexpr double kSiderealRate_rad_per_s = 7.2921150e-5;
+
+// The fastest a star image can move on the plate, px/s: f w / cos^2(theta) at
+// the format's corner (a star on the celestial equator, gnomonic projection).
+double MaxTrailRate_px_per_s(const DetectContext& context) {
+  if (!context.camera || context.camera->nominal_principal_distance_mm <= 0) {
+    throw Error(context.request.scan, "trails need a camera definition with its principal distance (--camera)");
+  }
+  const double f_mm = context.camera->nominal_principal_distance_mm;
+  const double half_diagonal_mm = 0.5 * std::hypot(context.camera->format_width_mm, context.camera->format_height_mm);
+  const double sec2 = 1.0 + (half_diagonal_mm / f_mm) * (half_diagonal_mm / f_mm);
+  return f_mm * kSiderealRate_rad_per_s * sec2 * 1e3 / context.pixel_size_um;
+}
+
+DutyCycleScheduleOptions TrailSchedule(const TrailRequest& trails) {
+  DutyCycleScheduleOptions schedule;
+  schedule.start_s = 0.0;  // times count from the plate's first opening
+  schedule.leading_dashes = trails.leading_dashes;
+  schedule.break_s = trails.break_s;
+  std::string why;
+  if (!schedule.Check(&why)) throw Error("trail program", why);
+  return schedule;
+}
+
+MeasuredPoint StarRow(const DetectedStar& star) {
+  MeasuredPoint row;
+  row.id = star.point.id;
+  row.kind = PointKind::kStar;
+  row.status = star.point.status;
+  row.x_px = star.point.position_px.x_px;
+  row.y_px = star.point.position_px.y_px;
+  row.sigma_x_px = star.point.sigma_x_px;
+  row.sigma_y_px = star.point.sigma_y_px;
+  std::stringstream names(StarFlagNames(star.flags));
+  for (std::string name; std::getline(names, name, ',');)
+    if (!name.empty()) row.flags.push_back(name);
+  if (!star.point.reason.empty()) row.flags.push_back(std::string(PointStatusName(star.point.status)) + ":" + star.point.reason);
+  return row;
+}
+
+// A tagged trail image. Its position is the trail's fitted track at the
+// image's mid-exposure (docs/detect.md: correlated along the trail); the
+// direct measurement stays in the flags. A bad image (off the track) keeps
+// its measured position and is rejected.
+MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const calib::UtcInstant& start_utc) {
+  MeasuredPoint row = StarRow(star);
+  const bool dot = t.kind == ExposureKind::kDot;
+  row.kind = dot ? PointKind::kTrailDot : PointKind::kTrailDash;
+  row.star_id = "S" + std::to_string(t.star + 1);
+  row.trail = "T" + std::to_string(t.trail);
+  row.dot = dot ? t.dot_index : t.dash_index;
+  row.id = row.star_id + "-" + row.trail + (dot ? "-D" : "-L") + std::to_string(*row.dot);
+  row.mid_time_utc = calib::FormatUtcIso8601(start_utc.PlusSeconds(t.mid_s), 3);
+  char value[64];
+  std::snprintf(value, sizeof value, "track_residual_px=%.4f", t.residual_px);
+  row.flags.push_back(value);
+  if (t.bad) {
+    row.status = PointStatus::kRejected;
+    row.flags.push_back("rejected:bad_fit");
+    return row;
+  }
+  std::snprintf(value, sizeof value, "measured_x_px=%.4f", star.point.position_px.x_px);
+  row.flags.push_back(value);
+  std::snprintf(value, sizeof value, "measured_y_px=%.4f", star.point.position_px.y_px);
+  row.flags.push_back(value);
+  row.flags.push_back("track_fit");
+  row.x_px = t.refined_px.x_px;
+  row.y_px = t.refined_px.y_px;
+  row.sigma_x_px = t.sigma_refined_x_px;
+  row.sigma_y_px = t.sigma_refined_y_px;
+  return row;
+}
+
+}  // namespace
 
 StageOutput RunStarStage(const DetectContext& context) {
   const DetectRequest& request = context.request;
@@ -17,28 +102,67 @@ StageOutput RunStarStage(const DetectContext& context) {
       if (p.status != PointStatus::kMissing) options.mask_px.push_back(p.position_px);
     options.mask_radius_px = 0.5 * context.grid->mark.arm_length_um / context.pixel_size_um + 3.0;
   }
+  std::optional<calib::UtcInstant> start_utc;
+  DutyCycleScheduleOptions schedule;
+  TrailOptions trail_options;
+  if (request.trails) {
+    try {
+      start_utc = calib::ParseUtcIso8601(request.trails->start_utc);
+    } catch (const Error& e) {
+      throw Error("--trails-start-utc", "'" + request.trails->start_utc + "' is not an ISO 8601 UTC time");
+    }
+    schedule = TrailSchedule(*request.trails);
+    // Trail mode (docs/trails.md): a 20 s dash is a star image swept along the arc, not a line defect;
+    // a dot is one image, never a pair.
+    const double rate_px_per_s = MaxTrailRate_px_per_s(context);
+    options.max_dash_length_px = 20.0 * rate_px_per_s;
+    options.pair_chi2_gain = 1e12;
+    trail_options.max_dash_spacing_px = 1.5 * options.max_dash_length_px;
+    trail_options.psf_fwhm_px = options.psf_fwhm_px;
+    trail_options.image_min_px = {0.0, 0.0};
+    trail_options.image_max_px = {context.image.info().width_px - 1.0, context.image.info().height_px - 1.0};
+  }
   const std::vector<DetectedStar> stars = DetectStars(context.image, options);
+
   StageOutput out;
   int measured = 0, rejected = 0;
   for (const DetectedStar& star : stars) {
     measured += star.point.status == PointStatus::kMeasured;
     rejected += star.point.status == PointStatus::kRejected;
-    MeasuredPoint row;
-    row.id = star.point.id;
-    row.kind = PointKind::kStar;
-    row.status = star.point.status;
-    row.x_px = star.point.position_px.x_px;
-    row.y_px = star.point.position_px.y_px;
-    row.sigma_x_px = star.point.sigma_x_px;
-    row.sigma_y_px = star.point.sigma_y_px;
-    std::stringstream names(StarFlagNames(star.flags));
-    for (std::string name; std::getline(names, name, ',');)
-      if (!name.empty()) row.flags.push_back(name);
-    if (!star.point.reason.empty()) row.flags.push_back(std::string(PointStatusName(star.point.status)) + ":" + star.point.reason);
-    out.rows.push_back(row);
   }
   out.summary = {{"measured", measured}, {"rejected", rejected}};
-  out.message = std::to_string(stars.size()) + " images";
+  if (!request.trails) {
+    for (const DetectedStar& star : stars) out.rows.push_back(StarRow(star));
+    out.message = std::to_string(stars.size()) + " images";
+    return out;
+  }
+
+  const TrailLinkResult linked = LinkTrails(stars, schedule, trail_options);
+  std::map<std::string, long> unassigned;
+  for (size_t i = 0; i < stars.size(); ++i) {
+    const TrailImage& t = linked.images[i];
+    MeasuredPoint row = StarRow(stars[i]);
+    if (!t.assigned) {
+      if (t.reason != "not_star") row.flags.push_back("trail:" + t.reason);
+      unassigned[t.reason]++;
+      out.rows.push_back(std::move(row));
+      continue;
+    }
+    out.rows.push_back(TrailRow(stars[i], t, *start_utc));
+  }
+  nlohmann::json reasons = nlohmann::json::object();
+  for (const auto& [reason, n] : unassigned) reasons[reason] = n;
+  long decoded = 0;
+  for (const TrailChain& c : linked.chains) decoded += c.trail > 0;
+  out.summary["trails"] = {{"decoded_trails", decoded},
+                           {"refused_runs", static_cast<long>(linked.chains.size()) - decoded},
+                           {"stars", linked.stars.size()},
+                           {"assigned_dots", linked.assigned_dots},
+                           {"assigned_dashes", linked.assigned_dashes},
+                           {"bad_images", linked.bad_images},
+                           {"unassigned_by_reason", reasons},
+                           {"summary", linked.Summary()}};
+  out.message = std::to_string(stars.size()) + " images; trails: " + linked.Summary();
   return out;
 }
 

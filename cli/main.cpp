@@ -31,11 +31,15 @@ int main(int argc, char** argv) {
   cli::RegisterSimulateCommand(app, global);
   cli::RegisterDetectCommand(app, global);
   cli::RegisterMeasureCommand(app, global);
+  cli::RegisterBatchCommand(app, global);
 
   try {
     app.parse(argc, argv);
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();  // a command's own exit code (batch: 1 some scan failed, 130 interrupted, ...)
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version exit 0; any usage error 2 (CLI11's own codes vary by error).
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const Error& e) {
     std::cerr << "platemeter: error: " << e.what() << '\n';
     return 1;

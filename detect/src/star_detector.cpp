@@ -17,6 +17,7 @@ namespace platemeter {
 namespace {
 
 using star_internal::BackgroundMesh;
+using star_internal::Component;
 using star_internal::FitPixel;
 using star_internal::FittedGaussian;
 using star_internal::GaussianFitResult;
@@ -98,6 +99,146 @@ DetectedStar Defect(double x, double y, const std::string& why) {
   return d;
 }
 
+// Trail mode: centre, direction and sweep length of a component from the second moments of its
+// own (positive-contrast) pixels: a uniform sweep of length L adds L^2 / 12 along its direction.
+struct SweepMoments {
+  double x = 0, y = 0, angle_rad = 0, length_px = 0, flux_dn = 0;
+};
+SweepMoments ComponentSweep(const std::vector<FitPixel>& pixels, const cv::Mat& labels, int label, long y0_abs) {
+  SweepMoments m;
+  double s = 0, sx = 0, sy = 0;
+  for (const FitPixel& p : pixels)
+    if (p.value_dn > 0 && labels.at<int>(int(p.y_px - y0_abs), int(p.x_px)) == label)
+      s += p.value_dn, sx += p.value_dn * p.x_px, sy += p.value_dn * p.y_px;
+  if (s <= 0) return m;
+  m.x = sx / s, m.y = sy / s, m.flux_dn = s;
+  double sxx = 0, syy = 0, sxy = 0;
+  for (const FitPixel& p : pixels)
+    if (p.value_dn > 0 && labels.at<int>(int(p.y_px - y0_abs), int(p.x_px)) == label) {
+      const double dx = p.x_px - m.x, dy = p.y_px - m.y;
+      sxx += p.value_dn * dx * dx, syy += p.value_dn * dy * dy, sxy += p.value_dn * dx * dy;
+    }
+  Eigen::Matrix2d c;
+  c << sxx / s, sxy / s, sxy / s, syy / s;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(c);
+  m.angle_rad = std::atan2(eig.eigenvectors()(1, 1), eig.eigenvectors()(0, 1));
+  m.length_px = std::sqrt(12.0 * std::max(0.0, eig.eigenvalues()(1) - eig.eigenvalues()(0)));
+  return m;
+}
+
+// Ratio of the major to the minor second moment of a component's mask: large for a line at any
+// angle (a slanted dash fills little of its box too), about 1 for a cross.
+double MaskElongation(const cv::Mat& labels, const Component& c) {
+  double n = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  for (int y = c.y; y < c.y + c.height; ++y)
+    for (int x = c.x; x < c.x + c.width; ++x)
+      if (labels.at<int>(y, x) == c.label) n += 1, sx += x, sy += y, sxx += double(x) * x, syy += double(y) * y, sxy += double(x) * y;
+  if (n < 2) return 1.0;
+  const double mx = sx / n, my = sy / n;
+  Eigen::Matrix2d m;
+  m << sxx / n - mx * mx, sxy / n - mx * my, sxy / n - mx * my, syy / n - my * my;
+  const Eigen::Vector2d l = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(m).eigenvalues();
+  return l(1) / std::max(l(0), 1e-3);
+}
+
+struct Box {
+  double x0, x1, y0, y1;
+};
+
+// Trail mode: fits one segment and reports it as a measured elongated image, or as a defect when
+// it is too long (line) or too wide (dust, wide scratch) for a dash.
+void MeasureSegment(const SweepMoments& m, const std::vector<FitPixel>& pixels, double noise, double psf_sigma,
+                    bool clipped, bool truncated, const StarDetectorOptions& o, const BackgroundMesh& mesh, long y0_abs,
+                    double sign, const Box& window, std::vector<DetectedStar>* result) {
+  star_internal::FittedSegment start;
+  start.x_px = m.x, start.y_px = m.y, start.angle_rad = m.angle_rad, start.length_px = m.length_px;
+  start.flux_dn = m.flux_dn, start.sigma_px = psf_sigma;
+  star_internal::SegmentFitResult fit = star_internal::FitSegment(pixels, start, noise);
+  if (!fit.ok) return;
+  // A faint image on the segment's wing (the first dot, 10 s after the last leading dash): the
+  // largest residual clearly off the segment starts a joint fit, kept when chi^2 drops by 25.
+  {
+    const star_internal::FittedSegment& g = fit.segment;
+    const double se = std::sqrt(g.sigma_px * g.sigma_px + 1.0 / 12.0);
+    const double c = std::cos(g.angle_rad), sn = std::sin(g.angle_rad);
+    auto off_segment = [&](double x, double y) {
+      const double du = x - g.x_px, dv = y - g.y_px;
+      const double a = std::abs(du * c + dv * sn) - 0.5 * g.length_px, b = std::abs(-du * sn + dv * c);
+      return std::hypot(std::max(a, 0.0), b) > 2.0 * se;
+    };
+    double worst = 0;
+    star_internal::FittedPoint point;
+    for (const FitPixel& p : pixels) {
+      const double r = p.value_dn - fit.offset_dn - star_internal::SegmentModel(g, p.x_px, p.y_px);
+      if (r > worst && off_segment(p.x_px, p.y_px)) worst = r, point.x_px = p.x_px, point.y_px = p.y_px;
+    }
+    if (worst > 3.0 * noise) {
+      point.flux_dn = worst * 2.0 * M_PI * se * se;
+      star_internal::SegmentFitResult joint = star_internal::FitSegmentAndPoint(pixels, g, point, noise);
+      if (joint.ok && fit.chi2 - joint.chi2 > 25.0 && joint.point.flux_dn > o.min_snr * joint.point.sigma_flux_dn &&
+          off_segment(joint.point.x_px, joint.point.y_px) && joint.point.x_px > window.x0 &&
+          joint.point.x_px < window.x1 && joint.point.y_px > window.y0 && joint.point.y_px < window.y1)
+        fit = std::move(joint);
+    }
+  }
+  const star_internal::FittedSegment& g = fit.segment;
+  const double ratio = g.sigma_px / psf_sigma;
+  if (ratio > o.max_dash_width_ratio || ratio < o.min_fwhm_ratio) {
+    result->push_back(Defect(g.x_px, g.y_px, "shape"));
+    return;
+  }
+  if (g.length_px > (1.0 + o.dash_length_tolerance) * o.max_dash_length_px + o.psf_fwhm_px) {
+    result->push_back(Defect(g.x_px, g.y_px, "line"));
+    return;
+  }
+  if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn) return;
+  if (g.x_px < window.x0 || g.x_px > window.x1 || g.y_px < window.y0 || g.y_px > window.y1) return;
+  DetectedStar d;
+  d.point.kind = PointKind::kStar;
+  d.point.status = PointStatus::kMeasured;
+  d.point.position_px = {g.x_px, g.y_px};
+  d.point.sigma_x_px = g.sigma_x_px;
+  d.point.sigma_y_px = g.sigma_y_px;
+  d.point.correlation_xy = g.correlation_xy;
+  d.flux_dn = g.flux_dn;
+  d.sigma_flux_dn = g.sigma_flux_dn;
+  // Peak of the swept PSF (the sweep's middle).
+  d.peak_dn = g.flux_dn / (std::sqrt(2.0 * M_PI) * g.sigma_px) *
+              std::erf(0.5 * g.length_px / (std::sqrt(2.0) * g.sigma_px)) / g.length_px;
+  d.background_dn = mesh.LevelAt(g.x_px, g.y_px - y0_abs) + sign * fit.offset_dn;
+  d.fwhm_px = g.sigma_px * kFwhmPerSigma;
+  d.snr = g.sigma_flux_dn > 0 ? g.flux_dn / g.sigma_flux_dn : 0.0;
+  d.length_px = g.length_px;
+  d.sigma_length_px = g.sigma_length_px;
+  d.angle_deg = g.angle_rad * 180.0 / M_PI;
+  // Ellipticity of the swept image: minor sigma over major sigma (sigma^2 + L^2 / 12).
+  d.ellipticity = 1.0 - g.sigma_px / std::sqrt(g.sigma_px * g.sigma_px + g.length_px * g.length_px / 12.0);
+  if (clipped) d.flags |= kStarSaturated;
+  if (truncated) d.flags |= kStarTruncated;
+  if (d.ellipticity > o.max_ellipticity && g.length_px > 3.0 * g.sigma_length_px) d.flags |= kStarElongated;
+  if (fit.has_point) {
+    const star_internal::FittedPoint& q = fit.point;
+    d.flags |= kStarBlended;
+    DetectedStar e;
+    e.point.kind = PointKind::kStar;
+    e.point.status = PointStatus::kMeasured;
+    e.point.position_px = {q.x_px, q.y_px};
+    e.point.sigma_x_px = q.sigma_x_px;
+    e.point.sigma_y_px = q.sigma_y_px;
+    e.point.correlation_xy = q.correlation_xy;
+    e.flux_dn = q.flux_dn;
+    e.sigma_flux_dn = q.sigma_flux_dn;
+    const double se2 = g.sigma_px * g.sigma_px + 1.0 / 12.0;
+    e.peak_dn = q.flux_dn / (2.0 * M_PI * se2);
+    e.background_dn = mesh.LevelAt(q.x_px, q.y_px - y0_abs) + sign * fit.offset_dn;
+    e.fwhm_px = d.fwhm_px;
+    e.snr = q.sigma_flux_dn > 0 ? q.flux_dn / q.sigma_flux_dn : 0.0;
+    e.flags = kStarBlended | (truncated ? kStarTruncated : 0u);
+    result->push_back(e);
+  }
+  result->push_back(d);
+}
+
 void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<DetectedStar>* out, StarDetectionStats* stats) {
   const double sign = o.dark ? -1.0 : 1.0;
   const double psf_sigma = o.psf_fwhm_px / kFwhmPerSigma;
@@ -128,12 +269,61 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
   const int n = cv::connectedComponentsWithStats(mask, labels, comp, centroids, 8, CV_32S);
   mask.release();
 
-  std::vector<std::vector<DetectedStar>> found(n);
-  tbb::parallel_for(1, n, [&](int l) {
-    const int area = comp.at<int>(l, cv::CC_STAT_AREA);
-    if (area < o.min_pixels) return;
-    const int bx = comp.at<int>(l, cv::CC_STAT_LEFT), by = comp.at<int>(l, cv::CC_STAT_TOP);
-    const int bw = comp.at<int>(l, cv::CC_STAT_WIDTH), bh = comp.at<int>(l, cv::CC_STAT_HEIGHT);
+  std::vector<Component> components;
+  for (int l = 1; l < n; ++l) {
+    Component c;
+    c.label = l;
+    c.area = comp.at<int>(l, cv::CC_STAT_AREA);
+    c.x = comp.at<int>(l, cv::CC_STAT_LEFT), c.y = comp.at<int>(l, cv::CC_STAT_TOP);
+    c.width = comp.at<int>(l, cv::CC_STAT_WIDTH), c.height = comp.at<int>(l, cv::CC_STAT_HEIGHT);
+    if (c.area >= o.min_pixels) components.push_back(c);
+  }
+  // Trail mode: the longest box one dash may have (its length, the tolerance, and the PSF's wings
+  // above the threshold at both ends); longer components are split at their gaps first.
+  const bool dash_mode = o.max_dash_length_px > 0;
+  const double dash_box_px = (1.0 + o.dash_length_tolerance) * o.max_dash_length_px + 6.0 * o.psf_fwhm_px;
+  const double line_box_px = dash_mode ? std::max(o.max_component_fwhm * o.psf_fwhm_px, dash_box_px)
+                                       : o.max_component_fwhm * o.psf_fwhm_px;
+  if (dash_mode) {
+    // Deblending (dashes of a run, a faint dot beside a bright dash): a piece must rise 3.5 filtered
+    // noise sigmas above its saddle and hold 0.5 % of the component's flux (SExtractor's default).
+    std::vector<float> level(components.size()), rise(components.size());
+    for (size_t k = 0; k < components.size(); ++k) {
+      const double sigma_f = noise_gain * mesh.SigmaAt(components[k].x + 0.5 * components[k].width,
+                                                       components[k].y + 0.5 * components[k].height);
+      level[k] = static_cast<float>(o.threshold_sigma * sigma_f);
+      rise[k] = static_cast<float>(3.5 * sigma_f);
+    }
+    // Large components that are not line-like (reseau crosses, dust) are not split: a cross's arms
+    // would pass as dashes. Runs of dashes, and a dash with a dot beside it, are line-like.
+    std::vector<Component> whole, split;
+    std::vector<float> split_level, split_rise;
+    for (size_t k = 0; k < components.size(); ++k) {
+      const Component& c = components[k];
+      const double long_side = std::max(c.width, c.height);
+      // Longer than a run of five leading dashes (140 s = 7 dash lengths): a line (scratch), kept whole.
+      const bool too_long = long_side > 7.0 * (1.0 + o.dash_length_tolerance) * o.max_dash_length_px + 6.0 * o.psf_fwhm_px;
+      const bool sparse = too_long || (long_side > 4.0 * o.psf_fwhm_px && MaskElongation(labels, c) <= 3.0);
+      if (sparse) {
+        whole.push_back(c);
+      } else {
+        split.push_back(c), split_level.push_back(level[k]), split_rise.push_back(rise[k]);
+      }
+    }
+    int next_label = n;
+    const int min_piece = std::max(o.min_pixels, static_cast<int>(0.5 * o.psf_fwhm_px * o.psf_fwhm_px));
+    components = star_internal::SplitComponents(&labels, filtered, split, split_level, split_rise, 2.0 * o.psf_fwhm_px,
+                                                min_piece, 0.005, &next_label);
+    components.insert(components.end(), whole.begin(), whole.end());
+  }
+  const int window_reach = dash_mode ? std::max(40, static_cast<int>(std::ceil(0.5 * dash_box_px + 3.0 * psf_sigma))) : 40;
+
+  std::vector<std::vector<DetectedStar>> found(components.size());
+  tbb::parallel_for(size_t{0}, components.size(), [&](size_t ci) {
+    const Component& cc = components[ci];
+    const int l = cc.label;
+    const int area = cc.area;
+    const int bx = cc.x, by = cc.y, bw = cc.width, bh = cc.height;
     int px = bx, py = by;
     float best = -1e30f;
     for (int y = by; y < by + bh; ++y)
@@ -141,11 +331,13 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
         if (labels.at<int>(y, x) == l && filtered.at<float>(y, x) > best) best = filtered.at<float>(y, x), px = x, py = y;
     const long peak_y_abs = b.y0_abs + py;
     if (peak_y_abs < b.keep_y0 || peak_y_abs >= b.keep_y1) return;
-    std::vector<DetectedStar>& result = found[l];
-    // Shape tests on the component: lines (scratches, dashes, trails), crosses, masked marks.
+    std::vector<DetectedStar>& result = found[ci];
+    // Shape tests on the component: lines (scratches; dashes and trails unless in trail mode), crosses,
+    // masked marks.
     const double long_side = std::max(bw, bh);
-    const bool line_like = long_side > o.max_component_fwhm * o.psf_fwhm_px;
-    const bool sparse = long_side > 4.0 * o.psf_fwhm_px && area < 0.3 * bw * bh;
+    const bool line_like = long_side > line_box_px;
+    bool sparse = long_side > 4.0 * o.psf_fwhm_px && area < 0.3 * bw * bh;
+    if (sparse && dash_mode && MaskElongation(labels, cc) > 3.0) sparse = false;  // a slanted dash, not a cross
     bool masked = false;
     for (const PixelPoint& m : o.mask_px)
       if (std::hypot(m.x_px - px, m.y_px - peak_y_abs) < o.mask_radius_px) masked = true;
@@ -158,7 +350,8 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
     const int half = static_cast<int>(std::ceil(3.0 * psf_sigma)) + 1;
     int x0 = std::min(bx, px - half) - grow, x1 = std::max(bx + bw, px + half + 1) + grow;
     int y0 = std::min(by, py - half) - grow, y1 = std::max(by + bh, py + half + 1) + grow;
-    x0 = std::max(x0, px - 40), x1 = std::min(x1, px + 41), y0 = std::max(y0, py - 40), y1 = std::min(y1, py + 41);
+    x0 = std::max(x0, px - window_reach), x1 = std::min(x1, px + window_reach + 1);
+    y0 = std::max(y0, py - window_reach), y1 = std::min(y1, py + window_reach + 1);
     bool truncated = false;
     if (x0 < 0) x0 = 0, truncated = true;
     if (x1 > b.width) x1 = static_cast<int>(b.width), truncated = true;
@@ -181,6 +374,15 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
         pixels.push_back({float(x), float(b.y0_abs + y), c});
       }
     const double noise = std::max(1e-3f, mesh.SigmaAt(px, py));
+    if (dash_mode) {
+      // A sweep clearly longer than the PSF: fitted as a segment (dash, long dot), not as a star.
+      const SweepMoments m = ComponentSweep(pixels, labels, l, b.y0_abs);
+      if (m.length_px > o.psf_fwhm_px) {
+        MeasureSegment(m, pixels, noise, psf_sigma, clipped > 0, truncated, o, mesh, b.y0_abs, sign,
+                       {x0 - 0.5, x1 - 0.5, b.y0_abs + y0 - 0.5, b.y0_abs + y1 - 0.5}, &result);
+        return;
+      }
+    }
     FittedGaussian start;
     start.x_px = px;
     start.y_px = peak_y_abs;
@@ -336,6 +538,9 @@ bool StarDetectorOptions::Check(std::string* why) const {
   if (!(max_ellipticity > 0 && max_ellipticity < 1)) return fail("max_ellipticity must be in (0, 1)");
   if (!(max_component_fwhm > 2)) return fail("max_component_fwhm must exceed 2");
   if (!(pair_chi2_gain > 0) || !(min_snr > 0) || !(mask_radius_px >= 0)) return fail("pair_chi2_gain, min_snr must be positive");
+  if (!(max_dash_length_px >= 0 && max_dash_length_px <= 2000)) return fail("max_dash_length_px must be 0..2000");
+  if (!(dash_length_tolerance >= 0 && dash_length_tolerance <= 2)) return fail("dash_length_tolerance must be 0..2");
+  if (!(max_dash_width_ratio > 1)) return fail("max_dash_width_ratio must exceed 1");
   return true;
 }
 

@@ -2,6 +2,8 @@
 // Internals of the star detector shared by its source files (not installed).
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 namespace platemeter::star_internal {
 
 // Background and noise of a band on a mesh of cells (absolute cell rows).
@@ -48,5 +50,62 @@ struct GaussianFitResult {
 // the given pixels; `stars` holds the start values.
 GaussianFitResult FitGaussians(const std::vector<FitPixel>& pixels, std::vector<FittedGaussian> stars,
                                double noise_sigma_dn, double min_sigma_px);
+
+// One fitted segment image: a circular Gaussian PSF swept uniformly along a
+// straight segment of length length_px centred on (x_px, y_px) (a dash or a long
+// dot of a duty-cycle trail; star_segment_fit.cpp).
+struct FittedSegment {
+  double x_px = 0, y_px = 0;            // absolute centre (mid-exposure for a uniform sweep)
+  double angle_rad = 0;                 // direction of the segment, (-pi/2, pi/2]
+  double length_px = 0;                 // full length of the sweep
+  double flux_dn = 0, sigma_px = 1;     // total flux (positive contrast), PSF sigma
+  double sigma_x_px = 0, sigma_y_px = 0, correlation_xy = 0, sigma_flux_dn = 0, sigma_length_px = 0;
+};
+
+// A point image fitted beside a segment (a faint dot on a bright dash's wing), the segment's width.
+struct FittedPoint {
+  double x_px = 0, y_px = 0, flux_dn = 0;
+  double sigma_x_px = 0, sigma_y_px = 0, correlation_xy = 0, sigma_flux_dn = 0;
+};
+
+struct SegmentFitResult {
+  bool ok = false, converged = false;
+  FittedSegment segment;
+  bool has_point = false;
+  FittedPoint point;
+  double offset_dn = 0, chi2 = 0, residual_sigma_dn = 0;
+  int pixels = 0;
+};
+
+// Least-squares fit of one segment plus a constant; `start` holds the start values.
+SegmentFitResult FitSegment(const std::vector<FitPixel>& pixels, const FittedSegment& start, double noise_sigma_dn);
+// The same with one point image beside it (fitted jointly).
+SegmentFitResult FitSegmentAndPoint(const std::vector<FitPixel>& pixels, const FittedSegment& start,
+                                    const FittedPoint& point, double noise_sigma_dn);
+// The segment's model value (contrast, without the offset) at a pixel centre.
+double SegmentModel(const FittedSegment& segment, double x_px, double y_px);
+
+// A connected component of the threshold mask: its label in the band's label
+// image and its bounding box (band-relative pixels).
+struct Component {
+  int label = 0;
+  int x = 0, y = 0, width = 0, height = 0;
+  int area = 0;
+};
+
+// Trail mode: deblends the components longer than min_long_side_px
+// (SExtractor-like): levels spaced exponentially between the detection level
+// and the component's peak (matched-filtered values); where the pixels above
+// a level fall apart into two or more significant pieces (area >= min_piece_area,
+// flux >= min_contrast of the component's, peak >= level + min_rise), each piece
+// is split again at higher levels; the remaining pixels go to the nearest final
+// piece (8-connected flood within the component). Separates the leading dashes
+// of a run (10 s gaps) and a faint dot from the bright dash next to it.
+// `labels` is rewritten for the pieces (new labels from *next_label on).
+// threshold[i] is the detection level of component in[i].
+std::vector<Component> SplitComponents(cv::Mat* labels, const cv::Mat& filtered, const std::vector<Component>& in,
+                                       const std::vector<float>& threshold, const std::vector<float>& min_rise,
+                                       double min_long_side_px, int min_piece_area, double min_contrast,
+                                       int* next_label);
 
 }  // namespace platemeter::star_internal

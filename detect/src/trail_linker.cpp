@@ -1,15 +1,15 @@
-// Trail linking and schedule decoding; the method is in trail_linker.h.
+// Trail decoding: leading-dash runs, growth along the predicted track, the
+// per-trail sidereal fit and the joining of trails into stars (trail_linker.h).
 #include "platemeter/detect/trail_linker.h"
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <numbers>
+#include <numeric>
 #include <unordered_map>
 
-#include <Eigen/Dense>
-
 #include "platemeter/core/error.h"
+#include "trail_internal.h"
 
 namespace platemeter {
 
@@ -18,190 +18,368 @@ bool TrailOptions::Check(std::string* why) const {
     if (why) *why = r;
     return false;
   };
-  if (!(max_link_px > 0)) return fail("max_link_px must be > 0");
-  if (!(min_link_px >= 0 && min_link_px < max_link_px)) return fail("min_link_px must be in [0, max_link_px)");
-  if (!(max_bend_deg > 0 && max_bend_deg < 90)) return fail("max_bend_deg must be in (0, 90)");
+  if (!(run_spacing_tolerance > 0 && run_spacing_tolerance < 0.5)) return fail("run_spacing_tolerance must be in (0, 0.5)");
+  if (!(max_run_bend_deg > 0 && max_run_bend_deg < 45)) return fail("max_run_bend_deg must be in (0, 45)");
+  if (!(max_dash_spacing_px > 0)) return fail("max_dash_spacing_px must be > 0");
   if (!(match_tolerance > 0 && match_tolerance < 0.5)) return fail("match_tolerance must be in (0, 0.5)");
-  if (!(max_gap_ratio > 1)) return fail("max_gap_ratio must be > 1");
-  if (min_images < 3) return fail("min_images must be >= 3");
-  if (max_unmatched < 0) return fail("max_unmatched must be >= 0");
+  if (!(min_tolerance_px > 0)) return fail("min_tolerance_px must be > 0");
+  if (min_exposures_after_run < 1) return fail("min_exposures_after_run must be >= 1");
+  if (max_missed_in_row < 1) return fail("max_missed_in_row must be >= 1");
   if (!(min_elongated_exposure_s >= 0)) return fail("min_elongated_exposure_s must be >= 0");
+  if (!(dash_length_tolerance > 0)) return fail("dash_length_tolerance must be > 0");
+  if (!(psf_fwhm_px > 0)) return fail("psf_fwhm_px must be > 0");
+  if (track_degree < 1 || track_degree > 6) return fail("track_degree must be 1..6");
+  if (!(bad_sigma > 1) || !(min_bad_px >= 0) || !(position_floor_px >= 0)) return fail("bad_sigma > 1, min_bad_px >= 0");
+  if (!(join_tolerance_px > 0) || !(join_tolerance_fraction >= 0)) return fail("join_tolerance_px must be > 0");
   if (!(edge_margin_px >= 0)) return fail("edge_margin_px must be >= 0");
+  if (!(max_median_residual_px > 0) || !(max_median_residual_fwhm >= 0)) return fail("max_median_residual_px must be > 0");
+  if (!(run_flux_tolerance > 0)) return fail("run_flux_tolerance must be > 0");
+  if (min_sibling_images < 1 || !(sibling_window_s >= 0)) return fail("min_sibling_images must be >= 1");
+  if (!(clean_radius_spacings >= 0)) return fail("clean_radius_spacings must be >= 0");
   return true;
+}
+
+std::string TrailLinkResult::Summary() const {
+  long decoded = 0;
+  for (const TrailChain& c : chains) decoded += c.trail > 0;
+  return std::to_string(assigned_dots) + " dots and " + std::to_string(assigned_dashes) + " dashes tagged in " +
+         std::to_string(decoded) + " trails of " + std::to_string(stars.size()) + " stars (" +
+         std::to_string(bad_images) + " bad); " + std::to_string(chains.size() - decoded) + " runs refused";
 }
 
 namespace {
 
-struct Pt {
-  double x, y;
-};
+using trail_internal::Track;
 
 // Spatial hash of points in cells of `cell` px.
 class Grid {
  public:
-  Grid(const std::vector<Pt>& p, const std::vector<int>& ids, double cell) : p_(p), cell_(cell) {
-    for (int i : ids) cells_[Key(p[i].x, p[i].y)].push_back(i);
+  Grid(const std::vector<PixelPoint>& p, const std::vector<int>& ids, double cell) : p_(p), cell_(cell) {
+    for (int i : ids) cells_[Key(p[i].x_px, p[i].y_px)].push_back(i);
   }
+  // Calls f(j) for every point within r of (x, y).
   template <class F>
-  void Near(int i, double r, F f) const {
-    const long cx = static_cast<long>(std::floor(p_[i].x / cell_)), cy = static_cast<long>(std::floor(p_[i].y / cell_));
-    for (long dy = -1; dy <= 1; ++dy)
-      for (long dx = -1; dx <= 1; ++dx) {
-        auto it = cells_.find(Pack(cx + dx, cy + dy));
+  void Near(double x, double y, double r, F f) const {
+    const long x0 = Cell(x - r), x1 = Cell(x + r), y0 = Cell(y - r), y1 = Cell(y + r);
+    for (long cy = y0; cy <= y1; ++cy)
+      for (long cx = x0; cx <= x1; ++cx) {
+        auto it = cells_.find(Pack(cx, cy));
         if (it == cells_.end()) continue;
         for (int j : it->second)
-          if (j != i && std::hypot(p_[j].x - p_[i].x, p_[j].y - p_[i].y) <= r) f(j);
+          if (std::hypot(p_[j].x_px - x, p_[j].y_px - y) <= r) f(j);
       }
   }
 
  private:
+  long Cell(double v) const { return static_cast<long>(std::floor(v / cell_)); }
   static long long Pack(long x, long y) { return (static_cast<long long>(x) << 32) ^ (y & 0xffffffffLL); }
-  long long Key(double x, double y) const {
-    return Pack(static_cast<long>(std::floor(x / cell_)), static_cast<long>(std::floor(y / cell_)));
-  }
-  const std::vector<Pt>& p_;
+  long long Key(double x, double y) const { return Pack(Cell(x), Cell(y)); }
+  const std::vector<PixelPoint>& p_;
   double cell_;
   std::unordered_map<long long, std::vector<int>> cells_;
 };
 
-// Chains of mutually linked images (degree <= 2, nearly straight).
-std::vector<std::vector<int>> BuildChains(const std::vector<Pt>& p, const std::vector<int>& ids, const TrailOptions& o) {
-  const Grid grid(p, ids, o.max_link_px);
-  const double cos_straight = std::cos((180.0 - o.max_bend_deg) * std::numbers::pi / 180.0);  // negative
-  std::map<int, std::vector<int>> proposed;
-  for (int i : ids) {
-    std::vector<std::pair<double, int>> nb;
-    grid.Near(i, o.max_link_px, [&](int j) {
-      const double d = std::hypot(p[j].x - p[i].x, p[j].y - p[i].y);
-      if (d >= o.min_link_px) nb.push_back({d, j});
+double Dist(const PixelPoint& a, const PixelPoint& b) { return std::hypot(a.x_px - b.x_px, a.y_px - b.y_px); }
+
+struct Context {
+  const std::vector<DetectedStar>& images;
+  const TrailOptions& o;
+  std::vector<PixelPoint> p;
+  std::vector<bool> usable, elongated;
+  bool use_lengths = false;
+  std::vector<std::vector<ShutterExposure>> per_trail;  // exposures of each trail, time order
+};
+
+// With measured segments (trail-mode detection): a dash's run neighbours lie along its own direction
+// (angle_deg) at 1.5 of its length, with its length. Each side takes its one candidate; two or more
+// (crossing trails) link nothing on that side, and the dash is marked `open`: a run ending there could
+// be longer than it looks.
+void SegmentNeighbours(const Context& c, const Grid& dashes, const std::vector<int>& dash_ids,
+                       std::unordered_map<int, std::vector<int>>* nb, std::unordered_map<int, bool>* open) {
+  const TrailOptions& o = c.o;
+  const double sin_bend = std::sin(o.max_run_bend_deg * std::numbers::pi / 180.0);
+  for (int i : dash_ids) {
+    const DetectedStar& di = c.images[i];
+    if (di.length_px <= 0) continue;
+    const double a = di.angle_deg * std::numbers::pi / 180.0, ux = std::cos(a), uy = std::sin(a);
+    const double expect = 1.5 * di.length_px;
+    const double along_tol = 2.0 * o.run_spacing_tolerance * expect + o.psf_fwhm_px;
+    for (int side : {1, -1}) {
+      int found = -1, count = 0;
+      dashes.Near(c.p[i].x_px, c.p[i].y_px, expect + along_tol, [&](int j) {
+        if (j == i || c.images[j].length_px <= 0) return;
+        const double dx = c.p[j].x_px - c.p[i].x_px, dy = c.p[j].y_px - c.p[i].y_px;
+        const double along = side * (dx * ux + dy * uy), across = std::abs(dx * uy - dy * ux);
+        if (along <= 0 || std::abs(along - expect) > along_tol) return;
+        if (across > std::max(0.5 * o.psf_fwhm_px, along * sin_bend)) return;
+        const double dl = std::abs(c.images[j].length_px - di.length_px);
+        if (dl > o.dash_length_tolerance * di.length_px + o.psf_fwhm_px + 3.0 * (di.sigma_length_px + c.images[j].sigma_length_px))
+          return;
+        found = j, ++count;
+      });
+      if (count == 1) (*nb)[i].push_back(found);
+      if (count > 1) (*open)[i] = true;
+    }
+  }
+}
+
+// Runs of leading dashes: elongated images equally spaced along a line (spatial order).
+std::vector<std::vector<int>> FindRuns(const Context& c, const Grid& dashes, const std::vector<int>& dash_ids) {
+  const TrailOptions& o = c.o;
+  const double cos_bend = std::cos(o.max_run_bend_deg * std::numbers::pi / 180.0);
+  // Each dash's two neighbours in a run: the nearest dash, and the nearest one opposite to it.
+  std::unordered_map<int, std::vector<int>> nb;
+  std::unordered_map<int, bool> open;
+  if (c.use_lengths) SegmentNeighbours(c, dashes, dash_ids, &nb, &open);
+  for (int i : dash_ids) {
+    if (c.use_lengths) break;
+    std::vector<std::pair<double, int>> near;
+    dashes.Near(c.p[i].x_px, c.p[i].y_px, o.max_dash_spacing_px, [&](int j) {
+      if (j != i) near.push_back({Dist(c.p[i], c.p[j]), j});
     });
-    std::sort(nb.begin(), nb.end());
-    if (nb.empty()) continue;
-    const int a = nb[0].second;
-    proposed[i].push_back(a);
-    const double ax = p[a].x - p[i].x, ay = p[a].y - p[i].y, an = nb[0].first;
-    for (size_t k = 1; k < nb.size(); ++k) {
-      const int b = nb[k].second;
-      const double c = (ax * (p[b].x - p[i].x) + ay * (p[b].y - p[i].y)) / (an * nb[k].first);
-      if (c <= cos_straight) {
-        proposed[i].push_back(b);
+    std::sort(near.begin(), near.end());
+    if (near.empty()) continue;
+    const auto [d0, a] = near[0];
+    // With measured lengths the spacing is 1.5 dash lengths (30 s against 20 s).
+    auto spacing_ok = [&](double d, int j) {
+      if (!c.use_lengths) return true;
+      const double expect = 0.75 * (c.images[i].length_px + c.images[j].length_px);
+      return std::abs(d - expect) <= 2.0 * o.run_spacing_tolerance * expect + c.o.psf_fwhm_px;
+    };
+    if (!spacing_ok(d0, a)) continue;
+    nb[i].push_back(a);
+    const double ax = (c.p[a].x_px - c.p[i].x_px) / d0, ay = (c.p[a].y_px - c.p[i].y_px) / d0;
+    for (size_t k = 1; k < near.size(); ++k) {
+      const auto [d, b] = near[k];
+      if (std::abs(d - d0) > o.run_spacing_tolerance * d0) continue;
+      const double cb = (ax * (c.p[b].x_px - c.p[i].x_px) + ay * (c.p[b].y_px - c.p[i].y_px)) / d;
+      if (cb <= -cos_bend && spacing_ok(d, b)) {
+        nb[i].push_back(b);
         break;
       }
     }
   }
-  auto has = [&](int i, int j) {
-    auto it = proposed.find(i);
-    return it != proposed.end() && std::find(it->second.begin(), it->second.end(), j) != it->second.end();
+  auto mutual = [&](int i, int j) {
+    auto it = nb.find(j);
+    return it != nb.end() && std::find(it->second.begin(), it->second.end(), i) != it->second.end();
   };
-  std::map<int, std::vector<int>> adj;
-  for (const auto& [i, js] : proposed)
+  std::unordered_map<int, std::vector<int>> adj;
+  for (const auto& [i, js] : nb)
     for (int j : js)
-      if (i < j && has(j, i)) {
-        adj[i].push_back(j);
-        adj[j].push_back(i);
-      }
-  std::vector<std::vector<int>> chains;
-  std::map<int, bool> seen;
-  auto walk = [&](int start) {
-    std::vector<int> c{start};
-    seen[start] = true;
-    int prev = -1, cur = start;
+      if (mutual(i, j)) adj[i].push_back(j);
+  std::vector<std::vector<int>> runs;
+  std::unordered_map<int, bool> seen;
+  for (const auto& [i, js] : adj) {
+    if (js.size() != 1 || seen[i]) continue;
+    std::vector<int> run{i};
+    seen[i] = true;
+    int prev = -1, cur = i;
     for (;;) {
       int next = -1;
       for (int j : adj[cur])
         if (j != prev && !seen[j]) next = j;
       if (next < 0) break;
       seen[next] = true;
-      c.push_back(next);
-      prev = cur;
-      cur = next;
+      run.push_back(next);
+      prev = cur, cur = next;
     }
-    return c;
-  };
-  for (const auto& [i, js] : adj)
-    if (js.size() == 1 && !seen[i]) chains.push_back(walk(i));
-  for (const auto& [i, js] : adj)
-    if (!seen[i]) chains.push_back(walk(i));  // closed loops: cut anywhere (will not match a schedule)
-  // Cut at gaps far above the chain's median (the break between two trails of one star: ~500 s
-  // against 20-108 s within a trail).
-  std::vector<std::vector<int>> cut;
-  for (const std::vector<int>& c : chains) {
+    // Equal spacing along the whole run, straight.
+    bool ok = true;
     std::vector<double> gaps;
-    for (size_t k = 1; k < c.size(); ++k) gaps.push_back(std::hypot(p[c[k]].x - p[c[k - 1]].x, p[c[k]].y - p[c[k - 1]].y));
-    std::vector<double> sorted = gaps;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    const double limit = sorted.empty() ? 0.0 : o.max_gap_ratio * sorted[sorted.size() / 2];
-    std::vector<int> piece{c[0]};
-    for (size_t k = 1; k < c.size(); ++k) {
-      if (gaps[k - 1] > limit) {
-        cut.push_back(piece);
-        piece.clear();
-      }
-      piece.push_back(c[k]);
-    }
-    cut.push_back(piece);
+    for (size_t k = 1; k < run.size(); ++k) gaps.push_back(Dist(c.p[run[k]], c.p[run[k - 1]]));
+    const double mean = std::accumulate(gaps.begin(), gaps.end(), 0.0) / gaps.size();
+    for (double g : gaps) ok = ok && std::abs(g - mean) <= o.run_spacing_tolerance * mean;
+    // An end dash with several candidates beyond it: the run may continue through a crossing.
+    ok = ok && !open[run.front()] && !open[run.back()];
+    if (ok) runs.push_back(run);
   }
-  return cut;
+  return runs;
 }
 
-struct Labelling {
-  int trail = 0;                 // 0-based
-  std::vector<int> exposure;     // per chain element (in time order): index into the trail's exposures, -1 none
-  std::vector<double> residual_s;
-  int score = -1000000;
-  int matched = 0, missing_leading = 0;
-  double rms_s = 0.0, rate = 0.0;
-  bool reversed = false;
+// Track degree the taken images support (span and count), capped by the option.
+int DegreeFor(int n, double span_s, int max_degree) {
+  int d = 1;
+  if (n >= 6 && span_s > 150) d = 2;
+  if (n >= 12 && span_s > 500) d = 3;
+  return std::min(d, max_degree);
+}
+
+struct Growth {
+  std::vector<std::pair<int, int>> taken;  // (exposure index in the trail, image)
+  int after_run = 0;                       // exposures taken past the leading run
+  int missed = 0;
+  double rate_px_per_s = 0.0;
 };
 
-// Assigns each arc length to the nearest exposure time through s(t) = c0 + c1 t + c2 t^2 (inverted
-// by Newton from the linear guess).
-void Assign(const std::vector<double>& s, const std::vector<double>& tau, const std::vector<double>& tol,
-            const std::vector<bool>& elongated, const std::vector<bool>& short_exposure, const Eigen::Vector3d& c,
-            Labelling* L) {
-  const size_t m = s.size();
-  L->exposure.assign(m, -1);
-  L->residual_s.assign(m, 0.0);
-  int last = -1;
-  for (size_t k = 0; k < m; ++k) {
-    double t = (s[k] - c[0]) / c[1];
-    for (int it = 0; it < 3; ++it) t -= (c[0] + c[1] * t + c[2] * t * t - s[k]) / (c[1] + 2 * c[2] * t);
-    const auto pos = std::lower_bound(tau.begin(), tau.end(), t) - tau.begin();
-    int best = -1;
-    double bd = 1e300;
-    for (long j : {static_cast<long>(pos) - 1, static_cast<long>(pos)}) {
-      if (j < 0 || j >= static_cast<long>(tau.size())) continue;
-      const double d = std::abs(t - tau[j]);
-      if (d < bd) bd = d, best = static_cast<int>(j);
-    }
-    // An elongated image is a dash or a long dot, never a short dot.
-    if (best >= 0 && bd <= tol[best] && best > last && !(elongated[k] && short_exposure[best])) {
-      L->exposure[k] = best;
-      L->residual_s[k] = t - tau[best];
-      last = best;
-    }
+// Whether image i may be exposure e (elongation and measured length against the duration).
+// With measured lengths (trail-mode detection) the length decides, within its own sigma; else the flag.
+// With the star's flux per second (flux_per_s > 0, from its leading dashes) the flux must match the
+// duration too: in a crowded field another star's image may sit where a faint dot was expected.
+bool Compatible(const Context& c, int i, const ShutterExposure& e, double rate_px_per_s, double flux_per_s = 0.0) {
+  if (flux_per_s > 0) {
+    const double expect = flux_per_s * e.duration_s;
+    if (std::abs(c.images[i].flux_dn - expect) > c.o.flux_tolerance * expect + 4.0 * c.images[i].sigma_flux_dn)
+      return false;
   }
+  if (c.use_lengths) {
+    const double expect = e.duration_s * rate_px_per_s;
+    const double tol = c.o.dash_length_tolerance * expect + c.o.psf_fwhm_px + 3.0 * c.images[i].sigma_length_px;
+    return std::abs(c.images[i].length_px - expect) <= tol;
+  }
+  return !(c.elongated[i] && e.duration_s < c.o.min_elongated_exposure_s);
 }
 
-bool Refit(const std::vector<double>& s, const std::vector<double>& tau, const Labelling& L, Eigen::Vector3d* c) {
-  std::vector<int> ks;
-  for (size_t k = 0; k < s.size(); ++k)
-    if (L.exposure[k] >= 0) ks.push_back(static_cast<int>(k));
-  if (ks.size() < 4) return false;
-  // The curvature term only with many matches: on a short piece it would bend the scale onto a wrong pattern.
-  const bool quadratic = ks.size() >= 15;
-  Eigen::MatrixXd A(ks.size(), quadratic ? 3 : 2);
-  Eigen::VectorXd b(ks.size());
-  for (size_t r = 0; r < ks.size(); ++r) {
-    const double t = tau[L.exposure[ks[r]]];
-    A(r, 0) = 1.0;
-    A(r, 1) = t;
-    if (quadratic) A(r, 2) = t * t;
-    b[r] = s[ks[r]];
+// Grows trail t from its run (`run` in time order = exposures 0..N-1) exposure by exposure.
+Growth Grow(const Context& c, const Grid& all, int t, const std::vector<int>& run, double flux_per_s) {
+  const std::vector<ShutterExposure>& ex = c.per_trail[t];
+  Growth g;
+  std::vector<double> ts;
+  std::vector<PixelPoint> ps;
+  // Images taken so far (a trail takes at most ~35: a short list, not a flag per input image).
+  std::vector<int> used;
+  auto is_used = [&used](int i) { return std::find(used.begin(), used.end(), i) != used.end(); };
+  for (size_t k = 0; k < run.size(); ++k) {
+    g.taken.push_back({static_cast<int>(k), run[k]});
+    ts.push_back(ex[k].mid_s);
+    ps.push_back(c.p[run[k]]);
+    used.push_back(run[k]);
   }
-  const Eigen::VectorXd x = A.colPivHouseholderQr().solve(b);
-  *c = Eigen::Vector3d(x[0], x[1], quadratic ? x[2] : 0.0);
-  return std::isfinite((*c)[1]) && (*c)[1] > 0;
+  Track track;
+  int missed_in_row = 0;
+  for (size_t j = run.size(); j < ex.size(); ++j) {
+    if (!track.Fit(ts, ps, {}, {}, DegreeFor(static_cast<int>(ts.size()), ts.back() - ts.front(), c.o.track_degree)))
+      break;
+    const PixelPoint v = track.VelocityAt(ex[j].mid_s);
+    const double rate = std::hypot(v.x_px, v.y_px);
+    double spacing_s = ex[j].mid_s - ex[j - 1].mid_s;
+    if (j + 1 < ex.size()) spacing_s = std::min(spacing_s, ex[j + 1].mid_s - ex[j].mid_s);
+    const double tol = std::max(c.o.min_tolerance_px, c.o.match_tolerance * spacing_s * rate);
+    const PixelPoint q = track.At(ex[j].mid_s);
+    int found = -1, count = 0;
+    all.Near(q.x_px, q.y_px, tol, [&](int i) {
+      if (!c.usable[i] || is_used(i) || !Compatible(c, i, ex[j], rate, flux_per_s)) return;
+      found = i, ++count;
+    });
+    // Once the track is established its prediction is far better than `tol`: an image off it by more
+    // than the prediction allows, with other images around (a crowded field), may be another star's
+    // (this trail's own image missing or merged): not taken.
+    if (count == 1 && ts.size() >= 8 && Dist(c.p[found], q) > c.o.tight_tolerance_px) {
+      double ss = 0;
+      for (size_t k = 0; k < ts.size(); ++k) ss += std::pow(Dist(track.At(ts[k]), ps[k]), 2);
+      const double rms = std::sqrt(ss / ts.size());
+      double sx = 0, sy = 0;
+      track.SigmaAt(ex[j].mid_s, &sx, &sy);
+      const double chi = std::sqrt(track.reduced_chi2());
+      const double sigma_pred = std::hypot(sx, sy) * (chi < 1 ? chi : 1.0);
+      if (Dist(c.p[found], q) > std::max(c.o.tight_tolerance_px, 5.0 * std::hypot(sigma_pred, rms))) {
+        bool crowded = false;
+        all.Near(c.p[found].x_px, c.p[found].y_px, 2.5 * c.o.psf_fwhm_px,
+                 [&](int i) { crowded = crowded || (i != found && !is_used(i)); });
+        if (crowded) count = 0;
+      }
+    }
+    if (count != 1) {  // nothing (a missing image), or a stray beside it: the exposure stays untaken
+      ++g.missed;
+      if (++missed_in_row > c.o.max_missed_in_row) break;
+      continue;
+    }
+    missed_in_row = 0;
+    used.push_back(found);
+    g.taken.push_back({static_cast<int>(j), found});
+    ts.push_back(ex[j].mid_s);
+    ps.push_back(c.p[found]);
+    ++g.after_run;
+  }
+  // Exposures past the last one taken are not missing (the trail may leave the scan).
+  if (!g.taken.empty()) {
+    const int last = g.taken.back().first;
+    g.missed = last + 1 - static_cast<int>(g.taken.size());
+  }
+  if (track.Fit(ts, ps, {}, {}, 1)) g.rate_px_per_s = std::hypot(track.VelocityAt(ts.back()).x_px, track.VelocityAt(ts.back()).y_px);
+  return g;
+}
+
+// The final sidereal fit of one trail: weighted track, outliers flagged bad one at a time.
+bool FitTrail(const Context& c, const std::vector<std::pair<int, int>>& taken, TrailChain* chain,
+              std::vector<TrailImage>* out, Track* final_track) {
+  const TrailOptions& o = c.o;
+  const int n = static_cast<int>(taken.size());
+  std::vector<bool> bad(n, false);
+  std::vector<double> t(n), sx(n), sy(n);
+  std::vector<PixelPoint> p(n);
+  for (int k = 0; k < n; ++k) {
+    const int i = taken[k].second;
+    const DetectedStar& d = c.images[i];
+    t[k] = (*out)[i].mid_s;
+    p[k] = c.p[i];
+    sx[k] = std::hypot(d.point.sigma_x_px > 0 ? d.point.sigma_x_px : 0.05, o.position_floor_px);
+    sy[k] = std::hypot(d.point.sigma_y_px > 0 ? d.point.sigma_y_px : 0.05, o.position_floor_px);
+  }
+  Track track;
+  bool fitted = false;
+  // Every pass refits without the images flagged so far: the final track never holds a bad one.
+  for (int marked = 0;; ++marked) {
+    std::vector<double> ft, fsx, fsy;
+    std::vector<PixelPoint> fp;
+    for (int k = 0; k < n; ++k)
+      if (!bad[k]) ft.push_back(t[k]), fp.push_back(p[k]), fsx.push_back(sx[k]), fsy.push_back(sy[k]);
+    if (ft.size() < 4) return false;
+    const int degree = DegreeFor(static_cast<int>(ft.size()), ft.back() - ft.front(), o.track_degree);
+    if (!track.Fit(ft, fp, fsx, fsy, degree)) break;
+    fitted = true;
+    // Studentised residuals (a fitted image's residual has the sigma sigma sqrt(1 - leverage): an
+    // image near a trail's end, which the track follows, is judged fairly); their robust spread
+    // (median chi of 2 dof = 1.177) scales the limit. deleted[k]: the residual had image k been left
+    // out of the fit, r / (1 - h).
+    std::vector<double> chi(n), deleted(n), good_chi;
+    for (int k = 0; k < n; ++k) {
+      const PixelPoint m = track.At(t[k]);
+      double hx = 0, hy = 0;
+      if (!bad[k]) track.LeverageAt(t[k], sx[k], sy[k], &hx, &hy);
+      const double rx = p[k].x_px - m.x_px, ry = p[k].y_px - m.y_px;
+      chi[k] = std::hypot(rx / (sx[k] * std::sqrt(1 - hx)), ry / (sy[k] * std::sqrt(1 - hy)));
+      deleted[k] = std::hypot(rx / (1 - hx), ry / (1 - hy));
+      if (!bad[k]) good_chi.push_back(chi[k]);
+    }
+    std::nth_element(good_chi.begin(), good_chi.begin() + good_chi.size() / 2, good_chi.end());
+    const double spread = std::max(1.0, good_chi[good_chi.size() / 2] / 1.1774);
+    int worst = -1;
+    for (int k = 0; k < n; ++k) {
+      if (bad[k]) continue;
+      if (chi[k] > o.bad_sigma * spread && deleted[k] > o.min_bad_px && (worst < 0 || chi[k] > chi[worst])) worst = k;
+    }
+    // At most a third of the images bad, and enough left for the track.
+    if (worst < 0 || marked + 1 > n / 3 || ft.size() <= 6) break;
+    bad[worst] = true;
+  }
+  if (!fitted) return false;
+  double ss = 0;
+  int good = 0;
+  for (int k = 0; k < n; ++k) {
+    TrailImage& ti = (*out)[taken[k].second];
+    const PixelPoint m = track.At(t[k]);
+    ti.residual_x_px = p[k].x_px - m.x_px;
+    ti.residual_y_px = p[k].y_px - m.y_px;
+    ti.residual_px = std::hypot(ti.residual_x_px, ti.residual_y_px);
+    ti.refined_px = m;
+    track.SigmaAt(t[k], &ti.sigma_refined_x_px, &ti.sigma_refined_y_px);
+    ti.bad = bad[k];
+    if (bad[k]) {
+      ti.reason = "bad_fit";
+      ++chain->bad_images;
+    } else {
+      ss += ti.residual_px * ti.residual_px, ++good;
+    }
+  }
+  chain->rms_px = good > 0 ? std::sqrt(ss / good) : 0.0;
+  *final_track = track;
+  return true;
+}
+
+// Union-find over chains.
+int Root(std::vector<int>& parent, int i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
 }
 
 }  // namespace
@@ -212,199 +390,429 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   if (!options.Check(&why)) throw Error("trail options", why);
   const std::vector<ShutterExposure> schedule = BuildShutterSchedule(program);
   const int trails = static_cast<int>(program.leading_dashes.size());
-  std::vector<std::vector<ShutterExposure>> per_trail(trails);
-  for (const ShutterExposure& e : schedule) per_trail[e.trail - 1].push_back(e);
-  // Times relative to each trail's first mid-exposure (better conditioned), and match tolerances.
-  std::vector<std::vector<double>> tau(trails), tol(trails);
-  std::vector<std::vector<bool>> short_exposure(trails);
-  for (int t = 0; t < trails; ++t) {
-    const auto& ex = per_trail[t];
-    for (const auto& e : ex) {
-      tau[t].push_back(e.mid_s - ex.front().mid_s);
-      short_exposure[t].push_back(e.duration_s < options.min_elongated_exposure_s);
-    }
-    for (size_t j = 0; j < ex.size(); ++j) {
-      double gap = 1e300;
-      if (j > 0) gap = std::min(gap, tau[t][j] - tau[t][j - 1]);
-      if (j + 1 < ex.size()) gap = std::min(gap, tau[t][j + 1] - tau[t][j]);
-      tol[t].push_back(options.match_tolerance * gap);
-    }
-  }
+  Context c{images, options, {}, {}, {}, false, std::vector<std::vector<ShutterExposure>>(trails)};
+  for (const ShutterExposure& e : schedule) c.per_trail[e.trail - 1].push_back(e);
 
   TrailLinkResult result;
-  result.images.resize(images.size());
-  std::vector<Pt> p(images.size());
-  std::vector<int> ids;
-  for (size_t i = 0; i < images.size(); ++i) {
+  const size_t n = images.size();
+  result.images.resize(n);
+  c.p.resize(n);
+  c.usable.assign(n, false);
+  c.elongated.assign(n, false);
+  std::vector<int> usable_ids, dash_ids, all_ids(n);
+  std::iota(all_ids.begin(), all_ids.end(), 0);
+  for (size_t i = 0; i < n; ++i) {
     const DetectedStar& d = images[i];
-    p[i] = {d.point.position_px.x_px, d.point.position_px.y_px};
+    c.p[i] = d.point.position_px;
     if (d.point.status != PointStatus::kMeasured || (d.flags & kStarDefect)) {
       result.images[i].reason = "not_star";
       continue;
     }
     result.images[i].reason = "unlinked";
-    ids.push_back(static_cast<int>(i));
+    c.usable[i] = true;
+    c.elongated[i] = (d.flags & kStarElongated) != 0;
+    c.use_lengths = c.use_lengths || d.length_px > 0;
+    usable_ids.push_back(static_cast<int>(i));
+    if (c.elongated[i]) dash_ids.push_back(static_cast<int>(i));
   }
+  const Grid all(c.p, all_ids, 32.0);
+  const Grid dashes(c.p, dash_ids, options.max_dash_spacing_px);
+  const bool bounded = options.image_max_px.x_px > options.image_min_px.x_px;
 
-  for (std::vector<int>& chain : BuildChains(p, ids, options)) {
-    const int cid = static_cast<int>(result.chains.size());
+  // 1-2. Runs, decoded by their length and grown in both directions.
+  std::vector<std::vector<std::pair<int, int>>> taken_by;  // per decoded chain
+  std::vector<int> owner_count(n, 0);
+  std::unordered_map<int, double> flux_of;  // decoded chain -> flux per second
+  std::unordered_map<int, std::pair<PixelPoint, double>> before_of;  // decoded chain -> (position one dash before
+                                                                     // its run, dash spacing)
+  for (const std::vector<int>& run : FindRuns(c, dashes, dash_ids)) {
     TrailChain tc;
-    for (int i : chain) result.images[i].chain = cid;
-    auto give_up = [&](const std::string& reason) {
+    tc.leading_dashes = static_cast<int>(run.size());
+    tc.images = run;
+    auto refuse = [&](const std::string& reason) {
       tc.reason = reason;
-      for (int i : tc.images) result.images[i].reason = reason;
+      for (int i : run)
+        if (result.images[i].chain < 0) result.images[i].reason = reason;
       result.chains.push_back(tc);
     };
-    tc.images = chain;
-    if (static_cast<int>(chain.size()) < options.min_images) {
-      give_up("short_chain");
+    const auto it = std::find(program.leading_dashes.begin(), program.leading_dashes.end(), tc.leading_dashes);
+    if (it == program.leading_dashes.end()) {
+      refuse("leading_dashes_incomplete");
       continue;
     }
-    const size_t m = chain.size();
-    // Best labelling over trail, direction and the exposures of the chain's ends.
-    std::map<std::vector<int>, Labelling> distinct;
-    for (int dir = 0; dir < 2; ++dir) {
-      std::vector<int> ordered = chain;
-      if (dir) std::reverse(ordered.begin(), ordered.end());
-      std::vector<double> s(m, 0.0);
-      std::vector<bool> elongated(m);
-      for (size_t k = 0; k < m; ++k) elongated[k] = (images[ordered[k]].flags & kStarElongated) != 0;
-      for (size_t k = 1; k < m; ++k)
-        s[k] = s[k - 1] + std::hypot(p[ordered[k]].x - p[ordered[k - 1]].x, p[ordered[k]].y - p[ordered[k - 1]].y);
-      for (int t = 0; t < trails; ++t) {
-        const auto& T = tau[t];
-        const int n = static_cast<int>(T.size());
-        const int N = program.leading_dashes[t];
-        for (int k0 : {0, 1})
-          for (int k1 : {static_cast<int>(m) - 1, static_cast<int>(m) - 2}) {
-            if (k1 <= k0) continue;
-            for (int j0 = 0; j0 < n; ++j0)
-              for (int j1 = j0 + (k1 - k0); j1 < n; ++j1) {
-                Labelling L;
-                L.trail = t;
-                L.reversed = dir;
-                const double rate = (s[k1] - s[k0]) / (T[j1] - T[j0]);
-                Eigen::Vector3d c(s[k0] - rate * T[j0], rate, 0.0);
-                Assign(s, T, tol[t], elongated, short_exposure[t], c, &L);
-                int matched = 0;
-                for (int e : L.exposure) matched += e >= 0;
-                if (matched * 2 < static_cast<int>(m)) continue;
-                for (int iter = 0; iter < 2; ++iter) {
-                  if (!Refit(s, T, L, &c)) break;
-                  Assign(s, T, tol[t], elongated, short_exposure[t], c, &L);
-                }
-                // Score: matched images minus exposures expected between the trail's start and the last match.
-                L.matched = 0;
-                int last = -1;
-                for (int e : L.exposure)
-                  if (e >= 0) ++L.matched, last = e;
-                std::vector<bool> seen(n, false);
-                for (int e : L.exposure)
-                  if (e >= 0) seen[e] = true;
-                int missing = 0;
-                L.missing_leading = 0;
-                for (int j = 0; j <= last; ++j)
-                  if (!seen[j]) {
-                    ++missing;
-                    if (j < N) ++L.missing_leading;
-                  }
-                L.score = L.matched - missing;
-                double ss = 0;
-                for (size_t k = 0; k < m; ++k)
-                  if (L.exposure[k] >= 0) ss += L.residual_s[k] * L.residual_s[k];
-                L.rms_s = std::sqrt(ss / std::max(1, L.matched));
-                L.rate = c[1];
-                // Key: the (image -> trail, exposure) labels, independent of direction.
-                std::vector<int> key(m, -1);
-                for (size_t k = 0; k < m; ++k)
-                  if (L.exposure[k] >= 0) {
-                    const size_t pos = dir ? m - 1 - k : k;
-                    key[pos] = t * 1000 + L.exposure[k];
-                  }
-                auto it = distinct.find(key);
-                if (it == distinct.end() || it->second.score < L.score) distinct[key] = std::move(L);
-              }
-          }
-      }
-    }
-    if (distinct.empty()) {
-      give_up("no_schedule_match");
-      continue;
-    }
-    const Labelling* best = nullptr;
-    int runner = -1000000;
-    for (const auto& [key, L] : distinct)
-      if (!best || L.score > best->score) best = &L;
-    for (const auto& [key, L] : distinct)
-      if (&L != best) runner = std::max(runner, L.score);
-    tc.score = best->score;
-    tc.runner_up_score = runner;
-    tc.trail = best->trail + 1;
-    tc.leading_dashes = program.leading_dashes[best->trail];
-    tc.rate_px_per_s = best->rate;
-    tc.rms_s = best->rms_s;
-    std::vector<int> ordered = chain;
-    if (best->reversed) std::reverse(ordered.begin(), ordered.end());
-    tc.images = ordered;
-    const int unmatched = static_cast<int>(m) - best->matched;
-    std::string reason;
-    int last_matched = -1, round_leading = 0;
-    for (size_t k = 0; k < m; ++k)
-      if (best->exposure[k] >= 0) {
-        last_matched = std::max(last_matched, best->exposure[k]);
-        if (best->exposure[k] < tc.leading_dashes && !(images[ordered[k]].flags & kStarElongated)) ++round_leading;
-      }
-    if (best->missing_leading > 0) reason = "leading_dashes_incomplete";
-    // The leading run must be seen as dashes, and the pattern must run on past the first two dot
-    // groups: a short piece of dots fits the dash pattern under some scale.
-    else if (options.require_elongated_dashes && round_leading > 0) reason = "leading_dashes_not_elongated";
-    else if (last_matched < tc.leading_dashes + options.min_exposures_after_run) reason = "short_pattern";
-    else if (runner >= best->score) reason = "ambiguous";
-    else if (unmatched > options.max_unmatched) reason = "no_schedule_match";
-    else if (options.image_max_px.x_px > options.image_min_px.x_px) {
-      // One dash before the run: extrapolated from the first two dashes (30 s apart both).
-      int k0 = -1, k1 = -1;
-      for (size_t k = 0; k < m; ++k)
-        if (best->exposure[k] == 0) k0 = static_cast<int>(k);
-        else if (best->exposure[k] == 1) k1 = static_cast<int>(k);
-      if (k0 < 0 || k1 < 0) {
-        reason = "leading_dashes_incomplete";
-      } else {
-        const Pt a = p[ordered[k0]], b = p[ordered[k1]];
-        const double x = 2 * a.x - b.x, y = 2 * a.y - b.y, e = options.edge_margin_px;
-        if (x < options.image_min_px.x_px + e || y < options.image_min_px.y_px + e ||
-            x > options.image_max_px.x_px - e || y > options.image_max_px.y_px - e)
-          reason = "at_edge";
-        // An image where the dash before the run would be: perhaps that dash, not linked.
-        const double r = 0.5 * std::hypot(b.x - a.x, b.y - a.y);
-        for (size_t i = 0; i < p.size() && reason.empty(); ++i)
-          if (std::hypot(p[i].x - x, p[i].y - y) < r) reason = "image_before_run";
-      }
-    }
-    if (!reason.empty()) {
-      tc.trail = 0;
-      give_up(reason);
-      continue;
-    }
-    for (size_t k = 0; k < m; ++k) {
-      TrailImage& ti = result.images[ordered[k]];
-      const int e = best->exposure[k];
-      if (e < 0) {
-        ti.reason = "stray";
+    const int t = static_cast<int>(it - program.leading_dashes.begin());
+    // Equal exposures, equal fluxes: a stray dash of another star continuing the run (which would
+    // change N) shows its own flux.
+    {
+      std::vector<double> f;
+      for (int i : run) f.push_back(images[i].flux_dn);
+      std::nth_element(f.begin(), f.begin() + f.size() / 2, f.end());
+      const double median = f[f.size() / 2];
+      bool same = true;  // (no measured fluxes, median 0: not compared)
+      if (median > 0)
+        for (int i : run)
+        same = same && std::abs(images[i].flux_dn - median) <=
+                           options.run_flux_tolerance * median + 4.0 * images[i].sigma_flux_dn;
+      if (!same) {
+        refuse("run_flux");
         continue;
       }
-      const ShutterExposure& ex = per_trail[best->trail][e];
+    }
+    std::vector<Growth> grown(2);
+    std::vector<std::vector<int>> ordered(2, run);
+    std::reverse(ordered[1].begin(), ordered[1].end());
+    double flux_per_s = 0.0;  // the run's median dash flux per second of exposure
+    if (options.flux_tolerance > 0) {
+      std::vector<double> f;
+      for (int i : run) f.push_back(images[i].flux_dn);
+      std::nth_element(f.begin(), f.begin() + f.size() / 2, f.end());
+      flux_per_s = std::max(0.0, f[f.size() / 2] / c.per_trail[t].front().duration_s);
+    }
+    for (int dir = 0; dir < 2; ++dir) grown[dir] = Grow(c, all, t, ordered[dir], flux_per_s);
+    const bool ok0 = grown[0].after_run >= options.min_exposures_after_run;
+    const bool ok1 = grown[1].after_run >= options.min_exposures_after_run;
+    if (ok0 == ok1) {
+      refuse(ok0 ? "ambiguous" : "short_pattern");
+      continue;
+    }
+    const int dir = ok0 ? 0 : 1;
+    // One dash before the run (30 s before its first): off the scan, or holding an image (a dash
+    // not seen as one), would leave the count N in doubt.
+    const std::vector<int>& r = ordered[dir];
+    const PixelPoint a = c.p[r[0]], b = c.p[r[1]];
+    const PixelPoint before{2 * a.x_px - b.x_px, 2 * a.y_px - b.y_px};
+    const double e = options.edge_margin_px;
+    if (bounded && (before.x_px < options.image_min_px.x_px + e || before.y_px < options.image_min_px.y_px + e ||
+                    before.x_px > options.image_max_px.x_px - e || before.y_px > options.image_max_px.y_px - e)) {
+      refuse("at_edge");
+      continue;
+    }
+    bool occupied = false;
+    all.Near(before.x_px, before.y_px, std::max(options.min_tolerance_px, 0.5 * Dist(a, b)),
+             [&](int) { occupied = true; });
+    if (occupied) {
+      refuse("image_before_run");
+      continue;
+    }
+    before_of[result.chains.size()] = {before, Dist(a, b)};
+    flux_of[result.chains.size()] = flux_per_s;
+    tc.trail = t + 1;
+    tc.rate_px_per_s = grown[dir].rate_px_per_s;
+    tc.missed_exposures = grown[dir].missed;
+    tc.images.clear();
+    for (const auto& [j, i] : grown[dir].taken) tc.images.push_back(i), ++owner_count[i];
+    taken_by.push_back(grown[dir].taken);
+    result.chains.push_back(tc);
+  }
+  // An image taken by two trails (crossing trails) belongs to neither.
+  std::vector<int> chain_of_taken;  // result.chains index of each taken_by entry
+  for (size_t k = 0; k < result.chains.size(); ++k)
+    if (result.chains[k].trail > 0) chain_of_taken.push_back(static_cast<int>(k));
+  std::vector<Track> tracks(result.chains.size());
+  std::vector<std::vector<std::pair<int, int>>> kept_of(result.chains.size());  // (exposure, image) per chain
+  for (size_t g = 0; g < taken_by.size(); ++g) {
+    const int cid = chain_of_taken[g];
+    TrailChain& tc = result.chains[cid];
+    const std::vector<ShutterExposure>& ex = c.per_trail[tc.trail - 1];
+    std::vector<std::pair<int, int>> kept;
+    tc.images.clear();
+    for (const auto& [j, i] : taken_by[g]) {
+      TrailImage& ti = result.images[i];
+      if (owner_count[i] > 1) {
+        ti.reason = "contested";
+        continue;
+      }
+      kept.push_back({j, i});
+      tc.images.push_back(i);
+      const ShutterExposure& s = ex[j];
+      ti.chain = cid;
       ti.assigned = true;
       ti.reason.clear();
-      ti.trail = ex.trail;
-      ti.kind = ex.kind;
-      ti.dot_index = ex.dot_index;
-      ti.dash_index = ex.dash_index;
-      ti.mid_s = ex.mid_s;
-      ti.residual_s = best->residual_s[k];
-      (ex.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
+      ti.trail = s.trail;
+      ti.kind = s.kind;
+      ti.dot_index = s.dot_index;
+      ti.dash_index = s.dash_index;
+      ti.mid_s = s.mid_s;
+      (s.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
     }
-    result.chains.push_back(tc);
+    // 3. The sidereal fit (a trail left with too few images after the contested ones is refused).
+    if (static_cast<int>(kept.size()) < tc.leading_dashes + options.min_exposures_after_run / 2 ||
+        !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
+      for (const auto& [j, i] : kept) {
+        TrailImage& ti = result.images[i];
+        (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
+        ti = TrailImage{};
+        ti.reason = "contested";
+      }
+      tc.trail = 0;
+      tc.reason = "contested";
+      tc.bad_images = 0;
+      continue;
+    }
+    // Another star's images taken along the way (a crowded field) leave the track off most of them;
+    // a trail's own images sit on it to their measuring precision.
+    {
+      std::vector<double> res;
+      for (const auto& [j, i] : kept)
+        if (!result.images[i].bad) res.push_back(result.images[i].residual_px);
+      std::nth_element(res.begin(), res.begin() + res.size() / 2, res.end());
+      const double limit = std::max(options.max_median_residual_px, options.max_median_residual_fwhm * options.psf_fwhm_px);
+      if (res.empty() || res[res.size() / 2] > limit) {
+        for (const auto& [j, i] : kept) {
+          TrailImage& ti = result.images[i];
+          (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
+          ti = TrailImage{};
+          ti.reason = "poor_track";
+        }
+        tc.trail = 0;
+        tc.reason = "poor_track";
+        tc.bad_images = 0;
+        continue;
+      }
+    }
+    // A bad image, or one off the track by more than tight_tolerance_px, with other images around it
+    // is likely another star's (a crowded field): not tagged ("off_track"). Alone, it is the trail's own
+    // displaced image: tagged, flagged bad. An image the track merely follows (leverage above
+    // max_leverage: beyond a long gap at the trail's end) cannot be checked: not tagged ("unverified").
+    bool dropped = false;
+    {
+      std::vector<std::pair<int, int>> good;
+      tc.images.clear();
+      for (const auto& [j, i] : kept) {
+        TrailImage& ti = result.images[i];
+        bool crowded = false;
+        if (ti.bad || ti.residual_px > options.tight_tolerance_px)
+          all.Near(c.p[i].x_px, c.p[i].y_px, options.crowd_radius_fwhm * options.psf_fwhm_px, [&](int o) {
+            if (o != i && result.images[o].chain != cid) crowded = true;
+          });
+        double hx = 0, hy = 0;
+        if (!ti.bad) {
+          const DetectedStar& d = images[i];
+          tracks[cid].LeverageAt(ti.mid_s, std::hypot(d.point.sigma_x_px > 0 ? d.point.sigma_x_px : 0.05, options.position_floor_px),
+                                 std::hypot(d.point.sigma_y_px > 0 ? d.point.sigma_y_px : 0.05, options.position_floor_px), &hx, &hy);
+        }
+        const bool unverified = std::max(hx, hy) > options.max_leverage;
+        if (crowded || unverified) {
+          (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
+          if (ti.bad) --tc.bad_images;
+          ti = TrailImage{};
+          ti.reason = unverified ? "unverified" : "off_track";
+          dropped = true;
+          continue;
+        }
+        good.push_back({j, i});
+        tc.images.push_back(i);
+      }
+      kept = good;
+    }
+    if (dropped) {  // the track without them
+      tc.bad_images = 0;
+      for (const auto& [j, i] : kept) result.images[i].bad = false, result.images[i].reason.clear();
+      if (static_cast<int>(kept.size()) < tc.leading_dashes + options.min_exposures_after_run / 2 ||
+          !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
+        for (const auto& [j, i] : kept) {
+          TrailImage& ti = result.images[i];
+          (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
+          ti = TrailImage{};
+          ti.reason = "off_track";
+        }
+        tc.trail = 0;
+        tc.reason = "off_track";
+        tc.bad_images = 0;
+        continue;
+      }
+    }
+    kept_of[cid] = kept;
+    result.bad_images += tc.bad_images;
+  }
+
+  // 4. Stars: trail A's track carried to B's images and back. Both must land on the other's
+  // fitted track within the tolerance; a trail joins at most one trail of each other number.
+  const int m = static_cast<int>(result.chains.size());
+  auto ends = [&](int k, double* t0, double* t1) {
+    *t0 = 1e300, *t1 = -1e300;
+    for (const auto& [j, i] : kept_of[k]) *t0 = std::min(*t0, result.images[i].mid_s), *t1 = std::max(*t1, result.images[i].mid_s);
+  };
+  // Whether track a (images up to a1 s) and track b (images from b0 s, later) lie on one arc.
+  auto on_one_arc = [&](const Track& ta, double a1, const Track& tb, double b0) {
+    const PixelPoint pa = ta.At(b0), pb = tb.At(b0), qa = ta.At(a1), qb = tb.At(a1);
+    const double tol = options.join_tolerance_px + options.join_tolerance_fraction * Dist(pa, qa);
+    return Dist(pa, pb) <= tol && Dist(qa, qb) <= tol;
+  };
+  auto decoded = [&](int k) { return result.chains[k].trail > 0 && !kept_of[k].empty(); };
+  // Every decoded trail's track under every trail number (its images re-timed: exposure j of a
+  // trail with N dashes is exposure j + N' - N of one with N').
+  struct Retimed {
+    bool ok = false;
+    Track track;
+    double t0 = 0, t1 = 0;
+  };
+  std::vector<std::vector<Retimed>> retimed(m, std::vector<Retimed>(trails));
+  for (int k = 0; k < m; ++k) {
+    if (!decoded(k)) continue;
+    const int t = result.chains[k].trail - 1;
+    for (int u = 0; u < trails; ++u) {
+      Retimed& rt = retimed[k][u];
+      if (u == t) {
+        rt.ok = true, rt.track = tracks[k];
+        ends(k, &rt.t0, &rt.t1);
+        continue;
+      }
+      const int shift = program.leading_dashes[u] - program.leading_dashes[t];
+      std::vector<double> ts;
+      std::vector<PixelPoint> ps;
+      for (const auto& [j, i] : kept_of[k]) {
+        const int jj = j + shift;
+        if (jj < 0 || jj >= static_cast<int>(c.per_trail[u].size())) continue;
+        ts.push_back(c.per_trail[u][jj].mid_s);
+        ps.push_back(c.p[i]);
+      }
+      if (ts.size() < 4 || !rt.track.Fit(ts, ps, {}, {}, tracks[k].degree())) continue;
+      rt.ok = true;
+      rt.t0 = *std::min_element(ts.begin(), ts.end()), rt.t1 = *std::max_element(ts.begin(), ts.end());
+    }
+  }
+  // Two trails on one arc under numbers other than theirs (a leading dash lost without trace makes
+  // trail N+1 look like trail N): both numbers are doubtful, both trails refused. Under their own
+  // numbers: a join. Only adjacent numbers are compared (the extrapolation spans one break; trails
+  // further apart join through their neighbours). Candidates: B's first image (its run's first
+  // dash: exposure N_ub - N_tb under number ub) near A's track at that exposure's time.
+  std::vector<bool> doubtful(m, false), joined(m, false);
+  std::vector<std::pair<int, int>> joins;
+  std::vector<std::vector<int>> partner_count(m, std::vector<int>(trails + 1, 0));
+  std::vector<PixelPoint> head(m);
+  std::vector<int> decoded_ids;
+  for (int k = 0; k < m; ++k)
+    if (decoded(k)) head[k] = c.p[kept_of[k].front().second], decoded_ids.push_back(k);
+  const Grid heads(head, decoded_ids, 64.0);
+  for (int a : decoded_ids) {
+    const int ta = result.chains[a].trail - 1;
+    for (int ua = 0; ua + 1 < trails; ++ua) {
+      const int ub = ua + 1;
+      const Retimed& ra = retimed[a][ua];
+      if (!ra.ok) continue;
+      const PixelPoint end = ra.track.At(ra.t1);
+      for (int tb = 0; tb < trails; ++tb) {
+        const int jj = program.leading_dashes[ub] - program.leading_dashes[tb];
+        if (jj < 0 || jj >= static_cast<int>(c.per_trail[ub].size())) continue;
+        const PixelPoint q = ra.track.At(c.per_trail[ub][jj].mid_s);
+        heads.Near(q.x_px, q.y_px, 10.0 + 0.05 * Dist(q, end), [&](int b) {
+          if (b == a || result.chains[b].trail - 1 != tb || !retimed[b][ub].ok) return;
+          const Retimed& rb = retimed[b][ub];
+          if (!on_one_arc(ra.track, ra.t1, rb.track, rb.t0)) return;
+          if (ua == ta && ub == tb) {
+            ++partner_count[a][tb + 1], ++partner_count[b][ta + 1];
+            joins.push_back({a, b});
+          } else {
+            doubtful[a] = doubtful[b] = true;
+          }
+        });
+      }
+    }
+  }
+  for (const auto& [a, b] : joins)
+    if (!doubtful[a] && !doubtful[b]) joined[a] = joined[b] = true;
+  // Sibling evidence from the raw images (the sibling trails need not be decoded): under trail
+  // number u, trail k's track carried to the exposures of trails u-1 and u+1 near its ends must
+  // find images of the right length there. Under the wrong number (a lost or a stray leading dash)
+  // it lands 30 s x the rate off. Counts the sibling exposures holding such an image.
+  auto sibling_score = [&](int k, int u) {
+    const Retimed& r = retimed[k][u];
+    if (!r.ok) return 0;
+    int score = 0;
+    for (int s : {u - 1, u + 1}) {
+      if (s < 0 || s >= trails) continue;
+      const double te = s < u ? r.t0 : r.t1;
+      const double gap_s = s < u ? c.per_trail[u].front().mid_s - c.per_trail[s].back().mid_s
+                                 : c.per_trail[s].front().mid_s - c.per_trail[u].back().mid_s;
+      const PixelPoint end = r.track.At(te);
+      for (const ShutterExposure& e : c.per_trail[s]) {
+        if (std::abs(e.mid_s - te) > gap_s + options.sibling_window_s) continue;
+        const PixelPoint q = r.track.At(e.mid_s);
+        if (bounded && (q.x_px < options.image_min_px.x_px || q.y_px < options.image_min_px.y_px ||
+                        q.x_px > options.image_max_px.x_px || q.y_px > options.image_max_px.y_px))
+          continue;
+        const double tol = options.join_tolerance_px + options.join_tolerance_fraction * Dist(q, end);
+        const PixelPoint v = r.track.VelocityAt(e.mid_s);
+        const double rate = std::hypot(v.x_px, v.y_px);
+        bool hit = false;
+        all.Near(q.x_px, q.y_px, tol, [&](int i) {
+          if (c.usable[i] && result.images[i].chain != k && Compatible(c, i, e, rate, flux_of.at(k))) hit = true;
+        });
+        score += hit;
+      }
+    }
+    return score;
+  };
+  for (int k : decoded_ids) {
+    if (doubtful[k]) continue;
+    const int t = result.chains[k].trail - 1;
+    const int own = sibling_score(k, t);
+    int alt = 0;
+    for (int u : {t - 1, t + 1})
+      if (u >= 0 && u < trails) alt = std::max(alt, sibling_score(k, u));
+    if (alt >= options.min_sibling_images && 2 * alt > own) {
+      doubtful[k] = true;  // its siblings say another number
+      continue;
+    }
+    if (joined[k] || (own >= options.min_sibling_images && 3 * alt <= own)) continue;
+    // Unconfirmed: kept only where nothing could have hidden a leading dash (or posed as one).
+    const auto& [before, spacing] = before_of.at(k);
+    bool clean = true;
+    all.Near(before.x_px, before.y_px, options.clean_radius_spacings * spacing, [&](int i) {
+      if (result.images[i].chain != k) clean = false;
+    });
+    if (!clean) doubtful[k] = true, joined[k] = false, result.chains[k].reason = "unconfirmed";
+  }
+  if (options.require_joined)
+    for (int k : decoded_ids)
+      if (!doubtful[k] && !joined[k]) doubtful[k] = true, result.chains[k].reason = "lone_trail";
+  for (int k = 0; k < m; ++k) {
+    if (!doubtful[k]) continue;
+    TrailChain& tc = result.chains[k];
+    if (tc.reason.empty()) tc.reason = "doubtful_number";
+    for (const auto& [j, i] : kept_of[k]) {
+      TrailImage& ti = result.images[i];
+      (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
+      if (ti.bad) --result.bad_images;
+      ti = TrailImage{};
+      ti.reason = tc.reason;
+    }
+    tc.trail = 0;
+    tc.bad_images = 0;
+    kept_of[k].clear();
+  }
+  std::vector<int> parent(m);
+  std::iota(parent.begin(), parent.end(), 0);
+  for (const auto& [a, b] : joins) {
+    const int ta = result.chains[a].trail, tb = result.chains[b].trail;
+    if (decoded(a) && decoded(b) && partner_count[a][tb] == 1 && partner_count[b][ta] == 1)
+      parent[Root(parent, a)] = Root(parent, b);
+  }
+  // A star may hold each trail number once; otherwise its trails stay stars of their own.
+  std::unordered_map<int, std::vector<int>> members;
+  for (int k = 0; k < m; ++k)
+    if (decoded(k)) members[Root(parent, k)].push_back(k);
+  std::vector<std::vector<int>> groups;
+  for (auto& [root, ks] : members) {
+    std::vector<int> numbers;
+    for (int k : ks) numbers.push_back(result.chains[k].trail);
+    std::sort(numbers.begin(), numbers.end());
+    if (std::adjacent_find(numbers.begin(), numbers.end()) != numbers.end()) {
+      for (int k : ks) groups.push_back({k});
+    } else {
+      std::sort(ks.begin(), ks.end(), [&](int x, int y) { return result.chains[x].trail < result.chains[y].trail; });
+      groups.push_back(ks);
+    }
+  }
+  std::sort(groups.begin(), groups.end());
+  for (const std::vector<int>& g : groups) {
+    const int s = static_cast<int>(result.stars.size());
+    result.stars.push_back({g});
+    for (int k : g) {
+      result.chains[k].star = s;
+      for (int i : result.chains[k].images) result.images[i].star = s;
+    }
   }
   return result;
 }

@@ -281,6 +281,22 @@ scratch_width_um = 20.0
   measured = 0;
   for (const DetectedStar& s : stars) measured += s.point.status == PointStatus::kMeasured;
   EXPECT_EQ(measured, 0);
+  // Trail mode (dashes up to 6 FWHM long measured): still no star from crosses, dust or scratches.
+  o.mask_px.clear();
+  o.max_dash_length_px = 6.0 * o.psf_fwhm_px;
+  stars = DetectStars(image, o);
+  measured = 0;
+  for (const DetectedStar& s : stars) {
+    if (s.point.status != PointStatus::kMeasured) continue;
+    ++measured;
+    double cross = 1e9;
+    for (const MeasuredPoint& t : r.plate.truth)
+      if (t.kind == PointKind::kReseau && t.x_px)
+        cross = std::min(cross, std::hypot(*t.x_px - s.point.position_px.x_px, *t.y_px - s.point.position_px.y_px));
+    ADD_FAILURE() << "trail mode: measured at " << s.point.position_px.x_px << " " << s.point.position_px.y_px << " length "
+                  << s.length_px << " fwhm " << s.fwhm_px << " snr " << s.snr << " nearest cross " << cross;
+  }
+  EXPECT_EQ(measured, 0) << "trail mode";
 }
 
 // Bands of 64 rows (many band edges through star images) give the same stars,
@@ -318,10 +334,124 @@ TEST(StarDetectorTest, BandsReportEveryStarOnceAsTheWholeImageDoes) {
   EXPECT_EQ(banded_measured, measured);
 }
 
+// Trail mode on a synthetic image (Gaussian PSF, sigma 1 px, swept uniformly along segments,
+// integrated over each pixel by 8 x 8 sub-samples, white noise): runs of three 30 s-spaced dashes
+// (gaps half a dash long), each followed 10 s after the last by a faint 0.6 s dot on its wing, are
+// measured as elongated images at their centres with their lengths, the dot separately; a line
+// four times the longest dash, a wide blob and a wide streak stay defects.
+TEST(StarDetectorTest, TrailModeMeasuresDashesAndKeepsLinesDefects) {
+  const long w = 400, h = 300;
+  const double noise = 10.0, psf_sigma = 1.0;
+  std::vector<float> v(static_cast<size_t>(w * h), 1000.0f);
+  auto add = [&](double cx, double cy, double length, double angle, double flux, double sigma) {
+    const double c = std::cos(angle), sn = std::sin(angle);
+    const int reach = static_cast<int>(0.5 * length + 5 * sigma) + 2;
+    for (long y = std::lround(cy) - reach; y <= std::lround(cy) + reach; ++y)
+      for (long x = std::lround(cx) - reach; x <= std::lround(cx) + reach; ++x) {
+        double sum = 0;
+        for (int j = 0; j < 8; ++j)
+          for (int i = 0; i < 8; ++i) {
+            const double du = x - 0.5 + (i + 0.5) / 8 - cx, dv = y - 0.5 + (j + 0.5) / 8 - cy;
+            const double a = du * c + dv * sn, b = -du * sn + dv * c, hl = 0.5 * length;
+            const double along = length > 0 ? 0.5 * (std::erf((a + hl) / (std::sqrt(2.0) * sigma)) -
+                                                     std::erf((a - hl) / (std::sqrt(2.0) * sigma))) / length
+                                            : std::exp(-0.5 * a * a / (sigma * sigma)) / (std::sqrt(2 * M_PI) * sigma);
+            sum += along * std::exp(-0.5 * b * b / (sigma * sigma)) / (std::sqrt(2 * M_PI) * sigma);
+          }
+        v[static_cast<size_t>(y * w + x)] += static_cast<float>(flux * sum / 64.0);
+      }
+  };
+  struct Truth {
+    double x, y, length;
+  };
+  std::vector<Truth> dashes, dots;
+  const double lengths[] = {6.0, 10.0, 16.0};
+  const double angles[] = {0.3, -1.2, 2.0};
+  for (int k = 0; k < 3; ++k) {
+    const double L = lengths[k], a = angles[k], c = std::cos(a), sn = std::sin(a);
+    const double x0 = 70.0 + 120.0 * k + 0.37 * k, y0 = 60.0 + 0.23 * k;
+    for (int d = 0; d < 3; ++d) {  // 30 s apart, 20 s long: spacing 1.5 L
+      const double x = x0 + 1.5 * L * d * c, y = y0 + 1.5 * L * d * sn;
+      add(x, y, L, a, 60000.0, psf_sigma);
+      dashes.push_back({x, y, L});
+    }
+    // The first dot: opens 10 s after the last dash closes, 0.6 s long (L / 20 per s).
+    const double s = 2 * 1.5 * L + 0.5 * L + 0.5 * L + 0.015 * L;
+    add(x0 + s * c, y0 + s * sn, 0.03 * L, a, 3000.0, psf_sigma);
+    dots.push_back({x0 + s * c, y0 + s * sn, 0.0});
+  }
+  add(200.0, 200.0, 72.0, 0.5, 400000.0, psf_sigma);  // a line (scratch)
+  add(80.0, 230.0, 0.0, 0.0, 60000.0, 3.0);          // a blob (dust)
+  add(330.0, 220.0, 14.0, -0.4, 60000.0, 3.0);       // a wide streak
+  uint64_t state = 12345;
+  auto uniform = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return ((state >> 11) + 0.5) / 9007199254740992.0;
+  };
+  for (float& x : v) x += static_cast<float>(noise * std::sqrt(-2 * std::log(uniform())) * std::cos(2 * M_PI * uniform()));
+
+  StarDetectorOptions o;
+  o.dark = false;
+  o.psf_fwhm_px = 2.3548 * psf_sigma;
+  o.max_dash_length_px = 18.0;
+  o.pair_chi2_gain = 1e12;
+  const std::vector<DetectedStar> found = DetectStarsInBuffer(v.data(), w, h, 65535.0, o);
+  auto nearest = [&](double x, double y, double r) -> const DetectedStar* {
+    const DetectedStar* best = nullptr;
+    for (const DetectedStar& f : found)
+      if (std::hypot(f.point.position_px.x_px - x, f.point.position_px.y_px - y) < r &&
+          (!best || std::hypot(f.point.position_px.x_px - x, f.point.position_px.y_px - y) <
+                        std::hypot(best->point.position_px.x_px - x, best->point.position_px.y_px - y)))
+        best = &f;
+    return best;
+  };
+  for (const Truth& t : dashes) {
+    const DetectedStar* f = nearest(t.x, t.y, 2.0);
+    ASSERT_TRUE(f) << "dash at " << t.x << " " << t.y << " not measured";
+    EXPECT_EQ(f->point.status, PointStatus::kMeasured);
+    EXPECT_TRUE(f->flags & kStarElongated) << StarFlagNames(f->flags);
+    const double err = std::hypot(f->point.position_px.x_px - t.x, f->point.position_px.y_px - t.y);
+    EXPECT_LT(err, 0.05) << "dash of " << t.length << " px";
+    EXPECT_LT(err, 5.0 * std::hypot(f->point.sigma_x_px, f->point.sigma_y_px) + 0.01);
+    EXPECT_NEAR(f->length_px, t.length, 0.05 * t.length + 0.2);
+    EXPECT_NEAR(f->fwhm_px, o.psf_fwhm_px, 0.15 * o.psf_fwhm_px);
+  }
+  for (const Truth& t : dots) {
+    const DetectedStar* f = nearest(t.x, t.y, 1.0);
+    ASSERT_TRUE(f) << "dot at " << t.x << " " << t.y << " not measured";
+    EXPECT_EQ(f->point.status, PointStatus::kMeasured);
+    EXPECT_FALSE(f->flags & kStarElongated);
+    EXPECT_LT(std::hypot(f->point.position_px.x_px - t.x, f->point.position_px.y_px - t.y),
+              0.1 + 4.0 * std::hypot(f->point.sigma_x_px, f->point.sigma_y_px));
+  }
+  int measured = 0, defects = 0;
+  for (const DetectedStar& f : found) {
+    const PixelPoint p = f.point.position_px;
+    const bool on_defect = std::hypot(p.x_px - 200, p.y_px - 200) < 40 || std::hypot(p.x_px - 80, p.y_px - 230) < 15 ||
+                           std::hypot(p.x_px - 330, p.y_px - 220) < 15;
+    if (!on_defect) continue;
+    (f.point.status == PointStatus::kMeasured ? measured : defects)++;
+  }
+  EXPECT_EQ(measured, 0) << "a line, blob or wide streak measured as a star";
+  EXPECT_GE(defects, 3);
+  // The same image without trail mode: the dashes are not stars either.
+  StarDetectorOptions plain = o;
+  plain.max_dash_length_px = 0.0;
+  plain.pair_chi2_gain = 30.0;
+  for (const DetectedStar& f : DetectStarsInBuffer(v.data(), w, h, 65535.0, plain))
+    for (const Truth& t : dashes)
+      if (t.length >= 10 && std::hypot(f.point.position_px.x_px - t.x, f.point.position_px.y_px - t.y) < 1.0) {
+        EXPECT_NE(f.point.status, PointStatus::kMeasured) << "dash of " << t.length << " px measured without trail mode";
+      }
+}
+
 TEST(StarDetectorTest, InvalidOptionsThrow) {
   StarDetectorOptions o;
   o.psf_fwhm_px = 0.1;
   std::vector<float> v(100, 1.f);
+  EXPECT_THROW(DetectStarsInBuffer(v.data(), 10, 10, 255, o), Error);
+  o = StarDetectorOptions{};
+  o.max_dash_length_px = -1.0;
   EXPECT_THROW(DetectStarsInBuffer(v.data(), 10, 10, 255, o), Error);
 }
 

@@ -1,12 +1,17 @@
-// Duty-cycle trails on a simulated Orbigon star-field plate (bright stars):
-// DetectStars, then LinkTrails; every assigned image is compared with the
-// simulator's truth rows (star, trail, dot index, mid-time) and the schedule of
-// seed 001 Table 1 is the simulator's own (defaults: 2/3/4/5 dashes, 8 min breaks).
+// Duty-cycle trails on a simulated Orbigon star-field plate: DetectStars in
+// trail mode, then LinkTrails; every assigned image is compared with the
+// simulator's truth rows (star, trail, dot index, mid-time, star grouping), the
+// positions with the truth and the renderer's Cramer-Rao bounds; the schedule
+// of seed 001 Table 1 is the simulator's own (defaults: 2/3/4/5 dashes, 8 min
+// breaks). Figures in docs/trails.md.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 
@@ -17,6 +22,7 @@
 #include "platemeter/grids/registry.h"
 #include "platemeter/measure/measurement_file.h"
 #include "platemeter/samples/render.h"
+#include "platemeter/samples/render_crb.h"
 #include "platemeter/samples/simulate.h"
 #include "platemeter/samples/spec.h"
 
@@ -54,102 +60,310 @@ grain_sigma_dn = 20
 
 TEST(TrailLinker, OptionsAreChecked) {
   TrailOptions o;
-  o.max_link_px = -1;
+  o.match_tolerance = -1;
   EXPECT_THROW(LinkTrails({}, DutyCycleScheduleOptions{}, o), Error);
   EXPECT_TRUE(LinkTrails({}, DutyCycleScheduleOptions{}).images.empty());
+}
+
+// The longest 20 s dash of the plate in px: the sidereal rate omega f, stretched by the gnomonic
+// projection up to (1 + (r/f)^2) at the format's half diagonal r (what a caller knows beforehand).
+double LongestDashPx(double pixel_um) {
+  const double f_mm = 80.2, r_mm = 57.0 * std::sqrt(2.0), omega = 7.2921159e-5;
+  return 20.0 * omega * f_mm * (1.0 + (r_mm / f_mm) * (r_mm / f_mm)) * 1e3 / pixel_um;
+}
+
+// A band of rows of a simulated Orbigon plate through the middle of the trails, detected in trail
+// mode and linked; the figures against the simulator's truth.
+struct BandRun {
+  sim::SimulatedPlate plate;
+  long w = 0, h = 0, y0 = 0;
+  std::vector<DetectedStar> found;
+  TrailOptions options;  // the linker's options used
+  TrailLinkResult r;
+  std::vector<const MeasuredPoint*> truth;  // trail dots and dashes
+  std::map<std::string, bool> inside;       // star + trail -> complete (all 25 dots and N + 4 dashes on the
+                                            // plate) and all its images inside the band (10 px margin)
+  std::vector<const MeasuredPoint*> match;  // per detection: the truth image within 1.5 px, or nullptr
+};
+
+BandRun RunBand(const std::string& spec, double pixel_um, long band_rows, double threshold_sigma) {
+  BandRun b;
+  b.plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(spec, "trails.toml"), DefinitionRegistry());
+  // A band (the whole plate at 12.5 um would be 92 Mpx): pixels small enough that the leading
+  // dashes (20 s open, 10 s closed) are resolved.
+  std::vector<double> rows;
+  for (const MeasuredPoint& t : b.plate.truth)
+    if (t.kind == PointKind::kTrailDot) rows.push_back(*t.y_px);
+  if (rows.empty()) return b;
+  std::nth_element(rows.begin(), rows.begin() + rows.size() / 2, rows.end());
+  b.w = b.plate.scene.width_px, b.h = band_rows;
+  b.y0 = std::clamp(std::lround(rows[rows.size() / 2]) - b.h / 2, 0L, b.plate.scene.height_px - b.h);
+  std::vector<float> values(static_cast<size_t>(b.w * b.h));
+  sim::SceneRenderer(b.plate.scene).RenderBand(b.y0, b.h, values.data());
+  StarDetectorOptions so;
+  so.psf_fwhm_px = std::max(0.8, 30.0 / pixel_um);
+  so.max_dash_length_px = LongestDashPx(pixel_um);
+  so.pair_chi2_gain = 1e12;  // trail images are single: a 3-10 s dot is a short segment, not a pair
+  so.threshold_sigma = threshold_sigma;
+  b.found = DetectStarsInBuffer(values.data(), b.w, b.h, 65535.0, so);
+  for (DetectedStar& f : b.found) f.point.position_px.y_px += static_cast<double>(b.y0);
+
+  TrailOptions to;
+  to.psf_fwhm_px = so.psf_fwhm_px;
+  to.max_dash_spacing_px = 1.5 * so.max_dash_length_px;
+  to.image_min_px = {0.0, static_cast<double>(b.y0)};
+  to.image_max_px = {b.w - 1.0, static_cast<double>(b.y0 + b.h - 1)};
+  b.options = to;
+  b.r = LinkTrails(b.found, DutyCycleScheduleOptions{}, to);
+
+  for (const MeasuredPoint& t : b.plate.truth)
+    if (t.kind == PointKind::kTrailDot || t.kind == PointKind::kTrailDash) b.truth.push_back(&t);
+  std::map<std::string, int> images_per_trail;
+  for (const auto* t : b.truth) images_per_trail[t->star_id + t->trail]++;
+  for (const auto* t : b.truth) {
+    const int dashes = std::stoi(t->trail.substr(1)) + 1 + 4;  // T1..T4: 2..5 leading dashes (Table 1 defaults)
+    const bool in = *t->y_px > b.y0 + 10 && *t->y_px < b.y0 + b.h - 10 &&
+                    images_per_trail[t->star_id + t->trail] == 25 + dashes;
+    auto [it, added] = b.inside.insert({t->star_id + t->trail, in});
+    if (!added) it->second = it->second && in;
+  }
+  for (const DetectedStar& f : b.found) {
+    const MeasuredPoint* best = nullptr;
+    double bd = 1.5;
+    for (const auto* t : b.truth) {
+      const double d = std::hypot(*t->x_px - f.point.position_px.x_px, *t->y_px - f.point.position_px.y_px);
+      if (d < bd) bd = d, best = t;
+    }
+    b.match.push_back(best);
+  }
+  return b;
+}
+
+// The band of the tests below, built once: catalog stars to V = 3.5, a V = 3.5 point image exposed 10 s
+// peaking at 2500 DN over 28 DN of noise, so the 0.6 s dots of the faintest stars are near the
+// detection limit (SNR ~6), as seed 001's eighth-magnitude stars on its plates. 12.5 um pixels:
+// a 20 s dash is 5-19 px long, its 10 s gaps 2.5-9 px (the PSF's FWHM is 2.4 px).
+const BandRun& Band() {
+  static const BandRun band = [] {
+    std::string spec = kSpec;
+    // Experiments (docs/trails.md): TRAIL_MAG sets both to another magnitude (more, fainter stars).
+    const std::string mag = std::getenv("TRAIL_MAG") ? std::getenv("TRAIL_MAG") : "3.5";
+    spec.replace(spec.find("reference_magnitude = 2.5"), 25, "reference_magnitude = " + mag);
+    spec.replace(spec.find("magnitude_limit = 2.5"), 21, "magnitude_limit = " + mag);
+    double pixel_um = 12.5;
+    if (const char* p = std::getenv("TRAIL_PIXEL_UM")) {  // experiments: other pixel sizes (docs/trails.md)
+      pixel_um = std::atof(p);
+      spec.replace(spec.find("pixel_size_um = 12.5"), 20, "pixel_size_um = " + std::string(p));
+    }
+    if (const char* path = std::getenv("TRAIL_SPEC")) {  // experiments: another spec (its pixel size: TRAIL_PIXEL_UM)
+      std::ifstream in(path);
+      spec.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    return RunBand(spec, pixel_um, static_cast<long>(1400 * 12.5 / pixel_um), 4.0);
+  }();
+  return band;
+}
+
+bool TagsRight(const TrailImage& ti, const MeasuredPoint& t) {
+  const bool dot = ti.kind == ExposureKind::kDot;
+  return (t.kind == PointKind::kTrailDot) == dot && t.trail == "T" + std::to_string(ti.trail) &&
+         *t.dot == (dot ? ti.dot_index : ti.dash_index) && std::abs(SecondsAfter0530(t.mid_time_utc) - ti.mid_s) < 0.0015;
 }
 
 TEST(TrailLinker, DecodesTheTrailsOfASimulatedOrbigonPlate) {
   if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
     GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
-  const char* text = kSpec;
-  const sim::SimulatedPlate plate =
-      sim::BuildSimulatedPlate(sim::ParseSimulationSpec(text, "trails.toml"), DefinitionRegistry());
-  // A band of rows through the middle of the trails (the whole plate at 12.5 um would be 92 Mpx):
-  // pixels small enough that the leading dashes (20 s open, 10 s closed) are resolved.
-  std::vector<double> rows;
-  for (const MeasuredPoint& t : plate.truth)
-    if (t.kind == PointKind::kTrailDot) rows.push_back(*t.y_px);
-  ASSERT_FALSE(rows.empty());
-  std::nth_element(rows.begin(), rows.begin() + rows.size() / 2, rows.end());
-  const long w = plate.scene.width_px, h = 1400;
-  const long y0 = std::clamp(std::lround(rows[rows.size() / 2]) - h / 2, 0L, plate.scene.height_px - h);
-  std::vector<float> values(static_cast<size_t>(w * h));
-  sim::SceneRenderer(plate.scene).RenderBand(y0, h, values.data());
-  StarDetectorOptions so;
-  so.psf_fwhm_px = 2.6;
-  so.max_fwhm_ratio = 8.0;    // dashes are 20 s segments (~18 px): not dust
-  so.pair_chi2_gain = 1e12;   // a dash is one image, never a pair
-  so.threshold_sigma = 10.0;  // low noise: a high threshold keeps the dashes of the leading run apart
-  std::vector<DetectedStar> found = DetectStarsInBuffer(values.data(), w, h, 65535.0, so);
-  for (DetectedStar& f : found) f.point.position_px.y_px += static_cast<double>(y0);
-
-  TrailOptions to;
-  to.max_link_px = 130.0;  // 108 s (group 3 to its separator) at ~0.9 px/s
-  to.image_min_px = {0.0, static_cast<double>(y0)};
-  to.image_max_px = {w - 1.0, static_cast<double>(y0 + h - 1)};
-  const TrailLinkResult r = LinkTrails(found, DutyCycleScheduleOptions{}, to);
-  ASSERT_EQ(r.images.size(), found.size());
-
-  // Truth dots and dashes; each detection matched to the nearest truth image within 1.5 px.
-  std::vector<const MeasuredPoint*> truth;
-  for (const MeasuredPoint& t : plate.truth)
-    if (t.kind == PointKind::kTrailDot || t.kind == PointKind::kTrailDash) truth.push_back(&t);
-  // The dots expected: those of trails lying wholly inside the band (10 px margin).
-  std::map<std::string, bool> inside;  // star/trail -> all images inside
-  for (const auto* t : truth) {
-    const bool in = *t->y_px > y0 + 10 && *t->y_px < y0 + h - 10;
-    auto [it, added] = inside.insert({t->star_id + t->trail, in});
-    if (!added) it->second = it->second && in;
-  }
+  const BandRun& b = Band();
+  const TrailLinkResult& r = b.r;
+  ASSERT_EQ(r.images.size(), b.found.size());
   long truth_dots = 0;
-  for (const auto* t : truth) truth_dots += t->kind == PointKind::kTrailDot && inside[t->star_id + t->trail];
+  for (const auto* t : b.truth) truth_dots += t->kind == PointKind::kTrailDot && b.inside.at(t->star_id + t->trail);
   std::set<const MeasuredPoint*> good_dots;
-  long wrong = 0, assigned_no_truth = 0;
-  std::map<int, std::set<std::string>> chain_stars;
-  for (size_t i = 0; i < found.size(); ++i) {
+  long wrong = 0, assigned_no_truth = 0, bad = 0;
+  std::map<int, std::set<std::string>> star_ids;          // linker star -> truth stars
+  std::map<std::string, std::set<int>> stars_of_truth;    // truth star -> linker stars
+  double before = 0, after = 0, crb = 0, normalised = 0;
+  long fitted = 0;
+  for (size_t i = 0; i < b.found.size(); ++i) {
     const TrailImage& ti = r.images[i];
     if (!ti.assigned) continue;
-    const PixelPoint p = found[i].point.position_px;
-    const MeasuredPoint* best = nullptr;
-    double bd = 1.5;
-    for (const auto* t : truth) {
-      const double d = std::hypot(*t->x_px - p.x_px, *t->y_px - p.y_px);
-      if (d < bd) bd = d, best = t;
-    }
-    if (!best) {
+    const MeasuredPoint* t = b.match[i];
+    if (!t) {
       ++assigned_no_truth;
       continue;
     }
-    chain_stars[ti.chain].insert(best->star_id);
-    const bool dot = ti.kind == ExposureKind::kDot;
-    const bool ok = (best->kind == PointKind::kTrailDot) == dot && best->trail == "T" + std::to_string(ti.trail) &&
-                    *best->dot == (dot ? ti.dot_index : ti.dash_index) &&
-                    std::abs(SecondsAfter0530(best->mid_time_utc) - ti.mid_s) < 0.0015;
-    if (!ok) {
+    if (ti.star >= 0) star_ids[ti.star].insert(t->star_id), stars_of_truth[t->star_id].insert(ti.star);
+    if (!TagsRight(ti, *t)) {
       ++wrong;
-      ADD_FAILURE() << "image " << i << " tagged T" << ti.trail << (dot ? " D" : " L")
-                    << (dot ? ti.dot_index : ti.dash_index) << " is " << best->id;
-    } else if (dot && inside[best->star_id + best->trail]) {
-      good_dots.insert(best);
+      ADD_FAILURE() << "image " << i << " tagged T" << ti.trail << (ti.kind == ExposureKind::kDot ? " D" : " L")
+                    << (ti.kind == ExposureKind::kDot ? ti.dot_index : ti.dash_index) << " is " << t->id;
+      continue;
     }
+    if (ti.bad) {
+      ++bad;
+      continue;
+    }
+    if (ti.kind != ExposureKind::kDot) continue;
+    if (b.inside.at(t->star_id + t->trail)) good_dots.insert(t);
+    const PixelPoint p = b.found[i].point.position_px;
+    before += std::pow(p.x_px - *t->x_px, 2) + std::pow(p.y_px - *t->y_px, 2);
+    after += std::pow(ti.refined_px.x_px - *t->x_px, 2) + std::pow(ti.refined_px.y_px - *t->y_px, 2);
+    // The renderer's Cramer-Rao bound of this dot (computed here only for the dots compared: the whole
+    // plate's bounds would take most of the test's time).
+    const sim::MarkCramerRao bound = sim::CramerRaoBound(
+        b.plate.scene, b.plate.scene.marks[static_cast<size_t>(b.plate.truth_mark[t - b.plate.truth.data()])]);
+    crb += std::pow(bound.sigma_x_px, 2) + std::pow(bound.sigma_y_px, 2);
+    normalised += std::pow((ti.refined_px.x_px - *t->x_px) / ti.sigma_refined_x_px, 2) +
+                  std::pow((ti.refined_px.y_px - *t->y_px) / ti.sigma_refined_y_px, 2);
+    ++fitted;
   }
-  for (const auto& [chain, stars] : chain_stars) EXPECT_EQ(stars.size(), 1u) << "chain " << chain << " mixes stars";
+  long mixed = 0, joined = 0, split_stars = 0;
+  for (const auto& [s, ids] : star_ids) mixed += ids.size() != 1;
+  for (const auto& [id, stars] : stars_of_truth) split_stars += stars.size() != 1;
+  for (const TrailStar& s : r.stars) joined += s.chains.size() > 1;
   std::map<std::string, long> reasons;
   for (const TrailImage& ti : r.images)
     if (!ti.assigned) reasons[ti.reason]++;
   std::string why;
   for (const auto& [k, n] : reasons) why += k + "=" + std::to_string(n) + " ";
-  std::printf("[trails] %ldx%ld px, %zu detections, %zu chains, %ld truth dots, %zu right, %ld wrong, "
-              "%ld assigned without truth, assigned dashes %ld; unassigned: %s\n",
-              w, h, found.size(), r.chains.size(), truth_dots, good_dots.size(), wrong, assigned_no_truth,
-              r.assigned_dashes, why.c_str());
+  const double coverage = truth_dots > 0 ? static_cast<double>(good_dots.size()) / truth_dots : 0.0;
+  std::printf("[trails] %ldx%ld px, %zu detections, %zu runs, %zu stars (%ld of several trails), %ld truth dots on "
+              "trails inside, %zu right (%.1f %%), %ld wrong, %ld assigned without truth, %ld flagged bad; %zu truth "
+              "stars decoded, %ld of them in more than one linker star; dot RMS vs truth (px, radial) measured %.4f, "
+              "track-refined %.4f, CRB %.4f; refined error / its sigma RMS %.2f per axis; unassigned: %s\n",
+              b.w, b.h, b.found.size(), r.chains.size(), r.stars.size(), joined, truth_dots, good_dots.size(),
+              100 * coverage, wrong, assigned_no_truth, bad, stars_of_truth.size(), split_stars,
+              std::sqrt(before / fitted), std::sqrt(after / fitted), std::sqrt(crb / fitted),
+              std::sqrt(normalised / (2.0 * fitted)), why.c_str());
+  std::printf("[trails] %s\n", r.Summary().c_str());
+  EXPECT_EQ(r.Summary().rfind(std::to_string(r.assigned_dots) + " dots and ", 0), 0u);
   EXPECT_EQ(wrong, 0);
   EXPECT_EQ(assigned_no_truth, 0);
+  EXPECT_EQ(mixed, 0) << "a linker star holds images of two truth stars";
   EXPECT_GE(truth_dots, 50);
-  // NOT the 95 % target: at this pixel size DetectStars returns the leading dash run of a trail as
-  // one defect (or not at all), so the trail number cannot be decoded and every chain must stay
-  // unassigned. What must hold is that nothing is assigned wrongly (above). Figures in the printout.
+  EXPECT_GE(coverage, 0.95);  // issue #5
+  EXPECT_LE(after, before);   // the sidereal fit refines the dots' positions
+  // With require_joined (lone trails refused too): no wrong tag either; the coverage printed.
+  TrailOptions confirm = b.options;
+  confirm.require_joined = true;
+  const TrailLinkResult rj = LinkTrails(b.found, DutyCycleScheduleOptions{}, confirm);
+  long right_joined = 0, wrong_joined = 0;
+  for (size_t i = 0; i < b.found.size(); ++i) {
+    const TrailImage& ti = rj.images[i];
+    if (!ti.assigned) continue;
+    const bool ok = b.match[i] && TagsRight(ti, *b.match[i]);
+    wrong_joined += !ok;
+    right_joined += ok && ti.kind == ExposureKind::kDot && b.inside.at(b.match[i]->star_id + b.match[i]->trail);
+  }
+  std::printf("[trails, require_joined] %ld of %ld dots right (%.1f %%), %ld wrong\n", right_joined, truth_dots,
+              100.0 * right_joined / truth_dots, wrong_joined);
+  EXPECT_EQ(wrong_joined, 0);
+  EXPECT_EQ(split_stars, 0) << "the trails of a star not joined";
+}
+
+// Dots displaced by 1 px (12.5 um: a measuring blunder, dust on the dot) are exposed by the
+// sidereal fit of their trail: flagged bad, their tags kept, and their refined position (the track
+// at their mid time, fitted without them) still on the truth.
+TEST(TrailLinker, TheSiderealFitExposesDisplacedDots) {
+  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
+    GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
+  const BandRun& b = Band();
+  std::vector<DetectedStar> found = b.found;
+  // One dot per decoded trail lying wholly in the band (its 12th, a 3.2 s dot, mid-trail), moved 1 px
+  // across the track. (At a cut trail's end the track follows a displaced image more: its leverage
+  // is high, and a 1 px shift can hide in the cubic.)
+  std::map<int, size_t> moved;  // chain -> image
+  for (size_t i = 0; i < found.size(); ++i) {
+    const TrailImage& ti = b.r.images[i];
+    if (!ti.assigned || ti.bad || ti.kind != ExposureKind::kDot || ti.dot_index != 12 || !b.match[i] ||
+        !b.inside.at(b.match[i]->star_id + b.match[i]->trail))
+      continue;
+    moved[ti.chain] = i;
+  }
+  ASSERT_GE(moved.size(), 5u);
+  for (const auto& [chain, i] : moved) {
+    const auto& imgs = b.r.chains[chain].images;
+    const PixelPoint a = found[imgs.front()].point.position_px, z = found[imgs.back()].point.position_px;
+    const double n = std::hypot(z.x_px - a.x_px, z.y_px - a.y_px);
+    found[i].point.position_px.x_px += -(z.y_px - a.y_px) / n;
+    found[i].point.position_px.y_px += (z.x_px - a.x_px) / n;
+  }
+  TrailOptions to = b.options;
+  const TrailLinkResult r = LinkTrails(found, DutyCycleScheduleOptions{}, to);
+  long exposed = 0, false_bad = 0;
+  for (const auto& [chain, i] : moved) {
+    const TrailImage& ti = r.images[i];
+    const MeasuredPoint& t = *b.match[i];
+    EXPECT_TRUE(ti.assigned && TagsRight(ti, t)) << t.id;
+    EXPECT_TRUE(ti.bad) << t.id << " residual " << ti.residual_px << " px";
+    if (!ti.bad && ti.chain >= 0) {
+      std::string ids;
+      for (int k : r.chains[ti.chain].images) ids += " " + (b.match[k] ? b.match[k]->id : std::string("?"));
+      ADD_FAILURE() << "its trail now:" << ids << "; before: " << b.r.chains[chain].images.size() << " images";
+    }
+    exposed += ti.bad;
+    EXPECT_NEAR(ti.residual_px, 1.0, 0.3) << t.id;
+    EXPECT_LT(std::hypot(ti.refined_px.x_px - *t.x_px, ti.refined_px.y_px - *t.y_px), 0.1) << t.id;
+  }
+  for (size_t i = 0; i < found.size(); ++i) {
+    if (!r.images[i].assigned) continue;
+    EXPECT_TRUE(b.match[i] && TagsRight(r.images[i], *b.match[i])) << "image " << i;
+    false_bad += r.images[i].bad && !b.r.images[i].bad && !moved.count(b.r.images[i].chain);
+  }
+  std::printf("[bad dots] %zu dots moved by 1 px across their track, %ld exposed, %ld other images newly flagged bad\n",
+              moved.size(), exposed, false_bad);
+  EXPECT_EQ(false_bad, 0);
+}
+
+// A first leading dash lost without trace (not even a defect in its place) makes trail N + 1 look
+// like a complete trail N. Such a trail must not be tagged with the wrong number: its re-timed track
+// falls on its star's other trails, so it is refused (doubtful_number). A lone trail (its star's
+// other trails not decoded: here cut by the band) cannot be checked: require_joined refuses those.
+TEST(TrailLinker, ALostLeadingDashNeverRenumbersATrail) {
+  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
+    GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
+  const BandRun& b = Band();
+  std::vector<DetectedStar> found;
+  std::vector<const MeasuredPoint*> match;
+  long dropped = 0;
+  for (size_t i = 0; i < b.found.size(); ++i) {
+    const TrailImage& ti = b.r.images[i];
+    if (ti.assigned && ti.kind == ExposureKind::kDash && ti.dash_index == 1 && ti.trail >= 2) {
+      ++dropped;
+      continue;
+    }
+    found.push_back(b.found[i]);
+    match.push_back(b.match[i]);
+  }
+  ASSERT_GE(dropped, 5);
+  TrailOptions to = b.options;
+  to.require_joined = true;
+  const TrailLinkResult r = LinkTrails(found, DutyCycleScheduleOptions{}, to);
+  long wrong = 0, refused = 0;
+  for (size_t i = 0; i < found.size(); ++i) {
+    if (r.images[i].reason == "doubtful_number") ++refused;
+    if (!r.images[i].assigned) continue;
+    const bool ok = match[i] && TagsRight(r.images[i], *match[i]);
+    wrong += !ok;
+    EXPECT_TRUE(ok) << (match[i] ? match[i]->id : "?") << " tagged T" << r.images[i].trail;
+  }
+  std::printf("[lost dashes] first dash of %ld trails T2..T4 removed: %ld wrong tags, %ld images refused as "
+              "doubtful_number, %ld dots still tagged\n", dropped, wrong, refused, r.assigned_dots);
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GT(refused, 0);
+  // Default options (lone trails kept): a wrong number only on a lone trail, never on a trail joined
+  // to others of its star.
+  to.require_joined = false;
+  const TrailLinkResult d = LinkTrails(found, DutyCycleScheduleOptions{}, to);
+  long wrong_lone = 0, wrong_joined = 0;
+  for (size_t i = 0; i < found.size(); ++i) {
+    const TrailImage& ti = d.images[i];
+    if (!ti.assigned || (match[i] && TagsRight(ti, *match[i]))) continue;
+    (ti.star >= 0 && d.stars[ti.star].chains.size() > 1 ? wrong_joined : wrong_lone)++;
+  }
+  std::printf("[lost dashes, default options] wrong tags on lone trails %ld, on joined trails %ld\n", wrong_lone,
+              wrong_joined);
+  EXPECT_EQ(wrong_joined, 0);
 }
 
 // The linker alone on the simulator's true images of a whole plate: every trail dot and dash as
@@ -194,7 +408,7 @@ TEST(TrailLinker, DecodesTheTrueImagesOfAWholePlate) {
     }
   }
   TrailOptions to;
-  to.max_link_px = 130.0;
+  to.max_dash_spacing_px = 40.0;  // 30 s at the fastest rate (~0.94 px/s at 12.5 um)
   // The exposed format (114 mm square: the simulator drops images outside it), in pixels.
   double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
   for (double u : {-57.0, 57.0})
@@ -242,12 +456,33 @@ TEST(TrailLinker, DecodesTheTrueImagesOfAWholePlate) {
               found.size(), r.chains.size(), truth_dots, expected, right, wrong, strays_assigned, why.c_str());
   EXPECT_EQ(wrong, 0);
   EXPECT_EQ(strays_assigned, 0);
+  {  // require_joined: lone trails (siblings cut by the format's edge) refused; no wrong tag either.
+    TrailOptions strict = to;
+    strict.require_joined = true;
+    const TrailLinkResult rs = LinkTrails(found, DutyCycleScheduleOptions{}, strict);
+    long right_strict = 0, wrong_strict = 0;
+    for (size_t i = 0; i < found.size(); ++i) {
+      const TrailImage& ti = rs.images[i];
+      if (!ti.assigned || !source[i]) {
+        wrong_strict += ti.assigned;
+        continue;
+      }
+      const bool dot = ti.kind == ExposureKind::kDot;
+      const MeasuredPoint* t = source[i];
+      const bool ok = (t->kind == PointKind::kTrailDot) == dot && t->trail == "T" + std::to_string(ti.trail) &&
+                      *t->dot == (dot ? ti.dot_index : ti.dash_index) &&
+                      std::abs(SecondsAfter0530(t->mid_time_utc) - ti.mid_s) < 0.0015;
+      wrong_strict += !ok;
+      right_strict += ok && dot && complete(*t);
+    }
+    std::printf("[true images, require_joined] %ld of %ld right, %ld wrong\n", right_strict, expected, wrong_strict);
+    EXPECT_EQ(wrong_strict, 0);
+  }
   EXPECT_GT(truth_dots, 500);
   EXPECT_GT(expected, 300);
-  // The 95 % target of issue #5 is NOT met yet (about 70 % at the time of writing: a missing dot or a
-  // stray can break a chain before its leading run, and the broken-off run is then refused).
-  // This is a regression floor, not the target; the figure is printed above.
-  EXPECT_GE(static_cast<double>(right), 0.6 * expected);
+  // Issue #5: at least 95 % of the dots present (a missing dot or a stray beside one must not break
+  // the trail: the growth predicts along the track and skips them).
+  EXPECT_GE(static_cast<double>(right), 0.95 * expected);
 }
 
 }  // namespace

@@ -12,6 +12,8 @@
 //      when it lowers chi^2 significantly (close pairs, fitted jointly);
 //      saturated pixels are left out, so saturated stars are fitted from
 //      their wings.
+// In trail mode (max_dash_length_px > 0) elongated components are split at
+// the gaps between dashes and fitted as PSFs swept along segments instead.
 // Formal sigmas are the position block of (J^T J)^-1 scaled by the fit's own
 // residual variance. Algorithm details in docs/stars.md.
 #include <optional>
@@ -53,6 +55,18 @@ struct StarDetectorOptions {
   double min_snr = 5.0;                   // flux / sigma(flux) below this: dropped
   bool windowed_centroid = false;         // true: SExtractor's windowed centroid (XWIN, Gaussian window of the PSF's
                                           // sigma) for unblended stars instead of the PSF fit's position
+  // Trail mode (duty-cycle plates): > 0 enables it. Segment images up to this long (px; the longest
+  // dash: 20 s x the sidereal rate in px/s at the plate's fastest star) are measured, not rejected:
+  // a component whose second moments show a sweep longer than the PSF's FWHM is fitted with a PSF
+  // swept along a straight segment (centre = mid-exposure position, length, angle) and flagged
+  // elongated when its ellipticity exceeds max_ellipticity. Components too long for one dash are
+  // first split at the gaps between dashes (raising the level inside the component). Defects stay
+  // defects: fitted length above (1 + dash_length_tolerance) x max_dash_length_px + psf_fwhm_px
+  // (scratches, lines), width above max_dash_width_ratio x the PSF (dust, wide scratches), crosses.
+  // 0: off (every elongated component is judged as a star, as without trails).
+  double max_dash_length_px = 0.0;        // px
+  double dash_length_tolerance = 0.3;     // fraction of max_dash_length_px a segment may exceed it by
+  double max_dash_width_ratio = 1.5;      // fitted segment PSF FWHM / psf_fwhm_px above this: defect
   std::vector<PixelPoint> mask_px;        // known non-star marks (reseau crosses' positions)
   double mask_radius_px = 10.0;           // px; components within this of a mask point are defects
   bool Check(std::string* why) const;
@@ -67,6 +81,9 @@ struct DetectedStar {
   double fwhm_px = 0.0;         // px; fitted FWHM
   double ellipticity = 0.0;     // 1 - b/a from Gaussian-weighted second moments
   double snr = 0.0;             // flux / sigma_flux
+  double length_px = 0.0;       // px; trail mode: fitted sweep length of a segment image (0: fitted as a point)
+  double sigma_length_px = 0.0; // px; formal sigma of length_px
+  double angle_deg = 0.0;       // deg; trail mode: direction of the segment from +x toward +y (row), -90..90
   unsigned flags = 0;           // StarFlag bits
 };
 

@@ -1,84 +1,153 @@
 #pragma once
 // Duty-cycle star trails (seed 001, Table 1; core/duty_cycle.h): the images of
 // one star exposed by the capping-shutter program lie along its diurnal arc.
-// LinkTrails
-//   1. links images into chains (each image to its nearest neighbour and to the
-//      nearest one on the opposite side, nearly collinear; only mutual links kept);
-//   2. matches each chain to the schedule: arc length along the chain against
-//      the exposures' mid times of one trail (trail t has leading_dashes[t]
-//      leading dashes), both directions, a quadratic s(t) refined on the matches;
-//   3. accepts a match only when the leading dash run is complete (it numbers the
-//      trail) and no other labelling scores as well; otherwise every image of
-//      the chain stays unassigned with a reason. No guessing: a dot is either
-//      tagged with its trail, dot index and mid-time or left unassigned.
-// Chains are per trail, not per star: the four trails of one star are four
-// chains (joining them into stars is not done here).
+// LinkTrails (docs/trails.md)
+//   1. finds the runs of leading dashes: elongated images equally spaced and
+//      collinear (30 s apart; with measured lengths, spacing = 1.5 x a dash's
+//      length). A run's length N numbers the trail (trail t has
+//      leading_dashes[t]); a run is refused when the position one dash before
+//      it is off the scan (at_edge) or holds an image (image_before_run: a dash
+//      not seen as one would change N);
+//   2. grows each run, in both time directions, exposure by exposure along
+//      the trail: a smooth track position(mid time) fitted to the images taken
+//      so far predicts the next exposure; the one image within the tolerance
+//      is taken, none (a missing dot) skips the exposure, two or more
+//      (a stray beside the dot) leave it untaken. The direction that
+//      reaches at least min_exposures_after_run exposures is the trail's; both
+//      or neither: unassigned with a reason. No guessing: a dot is either
+//      tagged with its trail, dot index and mid-time or left unassigned;
+//   3. fits each trail's images with its sidereal track (x and y polynomials of
+//      degree track_degree in the mid-exposure time, weighted by the images'
+//      sigmas): each image gets a residual, outliers are flagged bad, and every
+//      image gets the fitted position at its mid time with a formal sigma;
+//   4. joins the trails of one star: trail A's track extrapolated to trail B's
+//      images (and B's back to A's) must land within the join tolerance, with
+//      one partner only; a star with two trails of one number is split again.
+//      Both tracks re-timed under every other pair of trail numbers: two trails
+//      that meet under numbers other than their own (a first leading dash lost
+//      without trace makes trail N+1 look like trail N) are refused
+//      ("doubtful_number"). A lone trail (no other trail of its star decoded)
+//      cannot be checked so: require_joined refuses those too.
 #include <string>
 #include <vector>
 
 #include "platemeter/core/duty_cycle.h"
+#include "platemeter/core/pixel.h"
 #include "platemeter/detect/star_detector.h"
 
 namespace platemeter {
 
 struct TrailOptions {
-  double max_link_px = 40.0;       // px; longest link between consecutive images (the 100-108 s gaps of group 3 must fit)
-  double max_gap_ratio = 4.0;      // a chain is cut where a link exceeds this times its median link (trail breaks)
-  double min_link_px = 1.0;        // px; images closer than this are not linked (blends)
-  double max_bend_deg = 35.0;      // deg; largest turn of the chain at an image
-  double match_tolerance = 0.3;    // fraction of the smaller neighbouring schedule gap an image may sit off its exposure
-  int min_images = 8;              // chains with fewer images are left unassigned
+  double run_spacing_tolerance = 0.2;  // fraction; leading dashes' spacings may differ from their mean by this
+  double max_run_bend_deg = 10.0;      // deg; largest turn between consecutive leading dashes
+  double max_dash_spacing_px = 200.0;  // px; longest spacing of two leading dashes (30 s x the fastest rate)
+  double match_tolerance = 0.25;       // fraction of the smaller neighbouring exposure spacing (px) a taken image
+                                       // may lie off its predicted position
+  double min_tolerance_px = 1.5;       // px; the tolerance never drops below this
+  int min_exposures_after_run = 11;    // a trail must take this many exposures past its leading run
+  int max_missed_in_row = 5;           // growth stops after this many consecutive exposures without an image
+  double min_elongated_exposure_s = 5.0;  // s; an image flagged elongated only matches exposures at least this long
+  double dash_length_tolerance = 0.3;  // fraction; an image with a measured length_px must match the exposure's
+                                       // duration x rate within this (plus psf_fwhm_px), when length_px > 0
+  double psf_fwhm_px = 2.5;            // px; the PSF's FWHM (length comparisons: a point image measures 0)
+  int track_degree = 3;                // degree of the fitted track polynomials (3: the arc's curvature over 25 min)
+  double bad_sigma = 5.0;              // an image whose residual exceeds this many sigmas (the sigma scaled by the
+                                       // fit's robust spread when that exceeds 1) is flagged bad and left out
+  double min_bad_px = 0.25;            // px; residuals below this are never bad (model floor)
+  double position_floor_px = 0.02;     // px; added in quadrature to the images' formal sigmas (weights)
+  double join_tolerance_px = 1.0;      // px; trails are joined into stars when their tracks meet within this
+  double join_tolerance_fraction = 0.005;  // plus this fraction of the extrapolation distance (a 30 s error in
+                                       // timing, one trail number off, misses by 30 s x the rate: 4-15 px)
+  bool require_joined = false;         // true: a trail is tagged only when joined to another trail of its star
+                                       // (which confirms its number); lone trails stay unassigned ("lone_trail")
+  // Crowded fields (docs/trails.md, "Crowded fields"): what a trail must prove before it is tagged.
+  double max_median_residual_px = 0.15;  // px; a grown trail whose good images' median track residual exceeds this
+                                       // (or max_median_residual_fwhm x psf_fwhm_px) took other stars' images: refused
+  double max_median_residual_fwhm = 0.08;
+  double run_flux_tolerance = 0.3;     // fraction; a run's dashes (equal exposures) must have equal fluxes within this
+                                       // (plus 4 sigma): a stray dash of another star would change the count N
+  double flux_tolerance = 0.3;         // fraction; an image taken as exposure e must hold the run's flux per second x
+                                       // e's duration within this (plus 4 sigma); 0: fluxes not compared
+  double crowd_radius_fwhm = 10.0;     // a bad image with another star's image within this many FWHM is not tagged
+                                       // ("off_track": likely that star's); alone it stays tagged, flagged bad
+  double tight_tolerance_px = 0.3;     // px; with other images near (crowded), an image off the established track by
+                                       // more than this (and 5 sigma of the prediction) is not taken / not tagged
+  double max_leverage = 0.8;           // an image the track follows this much (hat-matrix diagonal) is not tagged
+  int min_sibling_images = 5;          // raw images on a sibling trail's predicted exposures that confirm a number
+  double sibling_window_s = 300.0;     // s; sibling exposures compared: within the break plus this of the trail's end
+  double clean_radius_spacings = 1.0;  // a trail confirmed by no sibling is kept only when no other image lies within
+                                       // this many dash spacings of the position one dash before its run
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
   // beyond it (trail 3 minus one dash looks like a complete trail 2): the position one dash before
-  // the run must lie inside by edge_margin_px, else the chain stays unassigned. Unset (max <= min):
+  // the run must lie inside by edge_margin_px, else the run is refused. Unset (max <= min):
   // no check, the caller guarantees that trails are not cut by the scan's edge.
   PixelPoint image_min_px{0.0, 0.0};
   PixelPoint image_max_px{0.0, 0.0};
-  double edge_margin_px = 10.0;    // px
-  bool require_elongated_dashes = true;  // the leading dashes must be flagged elongated (20 s exposures)
-  int min_exposures_after_run = 11;  // the match must reach this many exposures past the leading run (dots 1-10 + separator)
-  double min_elongated_exposure_s = 5.0;  // s; an image flagged elongated only matches exposures at least this long
-  int max_unmatched = 2;           // chain images matching no exposure (strays) tolerated in an accepted chain
+  double edge_margin_px = 10.0;        // px
+  double max_link_px = 40.0;           // px; UNUSED (the growth predicts along the track); kept so that older
+                                       // callers compile: set max_dash_spacing_px (30 s x the fastest rate) instead
   bool Check(std::string* why) const;
 };
 
 // The outcome for one input image (same order as the input).
 struct TrailImage {
-  int chain = -1;                  // chain id (index into TrailLinkResult::chains), -1 if not linked
+  int chain = -1;                  // decoded trail (index into TrailLinkResult::chains), -1 if none
+  int star = -1;                   // star (index into TrailLinkResult::stars) of assigned images, -1 otherwise
+                                   // (a trail joined to no other is a star of its own)
   bool assigned = false;           // true: trail/kind/indices/mid_s are valid
   int trail = 0;                   // 1..number of trails (T1..T4), in time order
   ExposureKind kind = ExposureKind::kDot;
   int dot_index = 0;               // 1..25 for dots
-  int dash_index = 0;              // 1.. for dashes
-  double mid_s = 0.0;              // mid-exposure, on the scale of DutyCycleScheduleOptions::start_s
-  double residual_s = 0.0;         // position along the chain expressed in time, minus mid_s
-  std::string reason;              // why not assigned: not_star, unlinked, short_chain, no_schedule_match,
-                                   // leading_dashes_incomplete, ambiguous, stray, at_edge,
-                                   // short_pattern
+  int dash_index = 0;              // 1.. for dashes (leading dashes first, then the separators)
+  double mid_s = 0.0;              // s; mid-exposure, on the scale of DutyCycleScheduleOptions::start_s
+  bool bad = false;                // assigned, but its position disagrees with the trail's track (outlier)
+  double residual_x_px = 0.0;      // px; measured minus fitted track position (assigned images)
+  double residual_y_px = 0.0;      // px
+  double residual_px = 0.0;        // px; length of the residual
+  PixelPoint refined_px;           // px; the fitted track at mid_s (assigned images)
+  double sigma_refined_x_px = 0.0; // px; formal sigma of refined_px (scaled by the fit's reduced chi^2 when > 1)
+  double sigma_refined_y_px = 0.0; // px
+  std::string reason;              // why not assigned: not_star, unlinked, at_edge, image_before_run,
+                                   // short_pattern, ambiguous, contested, leading_dashes_incomplete,
+                                   // doubtful_number, lone_trail, poor_track, unconfirmed, run_flux,
+                                   // off_track, unverified;
+                                   // for bad (still assigned) images: bad_fit
 };
 
+// One leading-dash run and the trail grown from it.
 struct TrailChain {
-  std::vector<int> images;         // input indices in time order (when decoded) or chain order
-  int trail = 0;                   // decoded trail, 0 if not decoded
-  int leading_dashes = 0;
-  double rate_px_per_s = 0.0;      // mean speed along the chain
-  double rms_s = 0.0;              // rms of residual_s over the matched images
-  int score = 0;                   // matched images minus expected-but-missing ones of the best labelling
-  int runner_up_score = 0;         // best score of a different labelling (ambiguity margin = score - this)
-  std::string reason;              // empty if decoded
+  std::vector<int> images;         // input indices in time order (taken images only)
+  int trail = 0;                   // decoded trail 1..4, 0 if refused
+  int leading_dashes = 0;          // dashes in the run
+  int star = -1;                   // index into TrailLinkResult::stars, -1 if not decoded
+  double rate_px_per_s = 0.0;      // px/s; speed along the track at its end (linear fit)
+  double rms_px = 0.0;             // rms residual of the track fit (good images)
+  int bad_images = 0;              // images flagged bad by the track fit
+  int missed_exposures = 0;        // exposures of the trail's span without an image taken
+  std::string reason;              // empty if decoded, else why refused
+};
+
+// The trails of one star (same diurnal arc, one after another).
+struct TrailStar {
+  std::vector<int> chains;         // indices into TrailLinkResult::chains, in trail order
 };
 
 struct TrailLinkResult {
   std::vector<TrailImage> images;  // one per input image
-  std::vector<TrailChain> chains;
+  std::vector<TrailChain> chains;  // decoded trails and refused runs
+  std::vector<TrailStar> stars;    // trails joined into stars (a lone trail is a star of its own)
   long assigned_dots = 0;
   long assigned_dashes = 0;
+  long bad_images = 0;             // assigned images flagged bad
+  // "D dots and L dashes tagged in T trails of S stars (B bad); R runs refused".
+  std::string Summary() const;
 };
 
 // Links and decodes the trails. `program` is the plate's shutter program with
 // start_s = the first opening on the caller's time scale. Images that are not
 // measured stars (rejected, defects) are left unassigned ("not_star").
-// Throws Error for invalid options.
+// Uses DetectedStar::length_px when set (trail-mode detection). Throws Error
+// for invalid options.
 TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCycleScheduleOptions& program,
                            const TrailOptions& options = {});
 

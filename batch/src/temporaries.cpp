@@ -1,0 +1,60 @@
+#include "platemeter/batch/temporaries.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <vector>
+
+#include "platemeter/core/error.h"
+
+namespace platemeter {
+namespace fs = std::filesystem;
+
+bool IsTemporaryName(const std::string& file_name) {
+  return file_name.size() > 1 && file_name[0] == '.' && file_name.find(".partial") != std::string::npos;
+}
+
+int RemoveTemporaries(const std::string& folder) {
+  int removed = 0;
+  std::error_code ec;
+  std::vector<fs::path> doomed;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    if (IsTemporaryName(it->path().filename().string())) doomed.push_back(it->path());
+  }
+  for (const fs::path& p : doomed) {
+    std::error_code e;
+    if (fs::remove(p, e)) ++removed;
+  }
+  return removed;
+}
+
+void WriteSharedFileAtomically(const std::string& path, const std::string& contents) {
+  const fs::path target(path);
+  // measure/atomic_file.h's temporary name is fixed per target: two shards finishing at the
+  // same moment would write into the same temporary. The pid makes it unique per process.
+  std::string temp_name = ".";
+  temp_name += target.filename().string();
+  temp_name += ".partial." + std::to_string(::getpid());
+  const fs::path temp = target.parent_path() / temp_name;
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out) throw Error(path, "cannot create the temporary file " + temp.string());
+    out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
+    out.flush();
+    if (!out) {
+      std::error_code ignored;
+      fs::remove(temp, ignored);
+      throw Error(path, "write failed (disk full?)");
+    }
+  }
+  std::error_code ec;
+  fs::rename(temp, target, ec);
+  if (ec) {
+    std::error_code ignored;
+    fs::remove(temp, ignored);
+    throw Error(path, "cannot rename into place (" + ec.message() + ")");
+  }
+}
+
+}  // namespace platemeter

@@ -1,0 +1,32 @@
+#pragma once
+// The first half of measure and validate: the scan detected (or detect's measurement
+// file read) and the correction options resolved from the request and the camera.
+#include <string>
+
+#include "measure_run.h"
+#include "platemeter/grids/registry.h"
+#include "platemeter/measure/measurement_file.h"
+#include "platemeter/measure/plate_corrections.h"
+
+namespace platemeter::cli {
+
+struct PreparedMeasurement {
+  MeasurementFile file;               // pixel columns filled
+  PlateCorrectionOptions options;     // the corrections to apply
+  const MasterGrid* grid = nullptr;   // the camera's reseau, null for fiducial-only cameras
+  std::string stem;                   // the plate id: the scan's stem
+};
+
+// Throws Error for option values that name nothing (model, fiducial model, orientation), before any work.
+void CheckMeasureOptions(const MeasureRequest& request);
+
+// Detects request.detect.scan (or reads it when it is a .csv measurement file) and resolves the correction
+// options. `local`: measure (reseau or fiducials, local step) rather than validate (reseau only).
+// The detectors' console lines are appended to *messages.
+PreparedMeasurement PrepareMeasurement(const MeasureRequest& request, const DefinitionRegistry& registry, bool local,
+                                       std::string* messages);
+
+// The corrections: the reseau chain for reseau cameras, else the fiducial one.
+PlateCorrectionReport CorrectPrepared(PreparedMeasurement* prepared);
+
+}  // namespace platemeter::cli

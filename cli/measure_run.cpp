@@ -1,0 +1,183 @@
+// The `platemeter measure` flow as a function (measure_run.h): detect, correct,
+// write the measurement file, the JSON report, the residual plot and the MicMac
+// measures atomically, and say what was done. CanonicalOptionsText is in
+// measure_options_text.cpp.
+#include "measure_run.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "measure_prepare.h"
+#include "measure_report.h"
+#include "platemeter/core/error.h"
+#include "platemeter/measure/atomic_file.h"
+#include "platemeter/measure/double_measurement.h"
+#include "platemeter/measure/micmac_export.h"
+#include "platemeter/measure/residual_plot.h"
+
+namespace platemeter::cli {
+namespace {
+
+// An error that does not name the scan yet gets it as its subject, so a batch log line says which scan failed.
+[[noreturn]] void RethrowNaming(const std::string& scan) {
+  try {
+    throw;
+  } catch (const Error& e) {
+    if (std::string(e.what()).find(scan) != std::string::npos) throw;
+    throw Error(scan, e.what());
+  } catch (const std::exception& e) {
+    throw Error(scan, OneLine(e.what()));
+  }
+}
+
+PreparedMeasurement Prepare(const MeasureRequest& request, const DefinitionRegistry& registry, std::string* messages) {
+  try {
+    return PrepareMeasurement(request, registry, true, messages);
+  } catch (...) {
+    RethrowNaming(request.detect.scan);
+  }
+}
+
+std::string FractionText(double fraction) {
+  std::ostringstream text;
+  text << fraction;
+  return text.str();
+}
+
+// A fit of a few crosses extrapolates over the plate without saying so: too few is a failed scan
+// (checked on the measured crosses before the fit, and on the ones it kept after).
+void CheckCrossCount(const PreparedMeasurement& p, int usable, double min_fraction, const std::string& scan) {
+  if (!p.grid) return;
+  const int grid = static_cast<int>(p.grid->points.size());
+  const int needed = static_cast<int>(std::ceil(min_fraction * grid - 1e-9));
+  if (usable >= needed) return;
+  throw Error(scan, "only " + std::to_string(usable) + " of the " + std::to_string(grid) + " crosses of grid '" +
+                        p.grid->name + "' usable for the reseau fit, " + std::to_string(needed) +
+                        " needed (min_cross_fraction " + FractionText(min_fraction) +
+                        "): wrong camera or pixel size, or most crosses hidden or damaged");
+}
+
+PlateCorrectionReport Correct(PreparedMeasurement* prepared, const MeasureRequest& request, const std::string& scan) {
+  int measured = 0;
+  for (const MeasuredPoint& point : prepared->file.points)
+    measured += point.kind == PointKind::kReseau && point.status == PointStatus::kMeasured;
+  CheckCrossCount(*prepared, measured, request.min_cross_fraction, scan);
+  PlateCorrectionReport report;
+  try {
+    report = CorrectPrepared(prepared);
+  } catch (...) {
+    RethrowNaming(scan);
+  }
+  CheckCrossCount(*prepared, report.fit.used, request.min_cross_fraction, scan);
+  return report;
+}
+
+nlohmann::json ReportJson(const MeasureRequest& request, const PreparedMeasurement& p, const PlateCorrectionReport& report) {
+  nlohmann::json j;
+  j["scan"] = request.detect.scan;
+  j["camera"] = request.detect.camera;
+  if (p.grid) j["grid"] = p.grid->name;
+  j["corrections"] = nlohmann::json::array();
+  for (const AppliedCorrection& c : p.file.header.corrections) {
+    nlohmann::json params = nlohmann::json::object();
+    for (const auto& [k, v] : c.parameters) params[k] = v;
+    j["corrections"].push_back({{"name", c.name}, {"parameters", params}});
+  }
+  j["points_corrected"] = report.points_corrected;
+  if (p.grid) j["reseau"] = ValidationJson(report, request.tolerance_um);
+  if (report.fiducial) j["fiducial_orientation"] = FiducialJson(*report.fiducial);
+  return j;
+}
+
+MeasureSummary Run(const MeasureRequest& request, const DefinitionRegistry& registry) {
+  std::ostringstream console;
+  std::string messages;
+  PreparedMeasurement p = Prepare(request, registry, &messages);
+  const PlateCorrectionReport report = Correct(&p, request, request.detect.scan);
+  console << messages;
+  nlohmann::json double_json;
+  if (!request.second_scan.empty()) {
+    MeasureRequest second = request;
+    second.detect.scan = request.second_scan;
+    second.detect.orientation = request.second_orientation;
+    std::string second_messages;
+    PreparedMeasurement q = Prepare(second, registry, &second_messages);
+    const PlateCorrectionReport second_report = Correct(&q, request, request.second_scan);
+    DoubleMeasurementReport d;
+    try {
+      d = MeanDoubleMeasurement(&p.file, q.file);
+    } catch (...) {
+      RethrowNaming(request.second_scan);
+    }
+    console << second_messages << "double measurement: " << d.paired << " points paired, rms discrepancy "
+            << d.rms_discrepancy_mm * 1e3 << " um (" << d.rms_normalized << " of the sigmas)\n";
+    double_json = DoubleMeasurementJson(request.second_scan, second_report, p.grid != nullptr, d, request.tolerance_um);
+  }
+
+  std::filesystem::create_directories(request.out_dir);
+  const std::filesystem::path dir(request.out_dir);
+  const std::string csv = (dir / (p.stem + ".measurements.csv")).string();
+  const std::string json = (dir / (p.stem + ".measure.json")).string();
+  const std::string png = (dir / (p.stem + ".residuals.png")).string();
+  const std::string xml = (dir / (p.stem + ".micmac.xml")).string();
+  MeasureSummary summary;
+  auto written = [&summary](const std::string& path) {
+    summary.written_files.push_back(std::filesystem::absolute(path).lexically_normal().string());
+    return summary.written_files.back();
+  };
+  WriteMeasurementFile(csv, p.file);
+  written(csv);
+  WriteMicMacMeasures(xml, p.file);
+  written(xml);
+  if (p.grid) {
+    ResidualPlotOptions plot;
+    plot.tolerance_um = request.tolerance_um;
+    WriteResidualPlotPng(png, report.observations, report.fit, plot);
+    summary.plot_png = written(png);
+  }
+  nlohmann::json j = ReportJson(request, p, report);
+  if (!double_json.is_null()) j["double_measurement"] = double_json;
+  WriteFileAtomically(json, j.dump(2) + "\n");
+  summary.report_json = written(json);
+
+  if (p.grid) {
+    console << "reseau fit (" << ReseauFitModelName(report.fit.model) << "): " << report.fit.used << " crosses, "
+            << report.fit.rejected << " rejected, rms " << report.fit.rms_mm * 1e3 << " um\n";
+  }
+  if (report.fiducial) {
+    const ReseauFit& f = report.fiducial->fit;
+    console << "fiducial orientation (" << ReseauFitModelName(f.model) << "): " << f.used << " fiducials, " << f.rejected
+            << " rejected, rms " << f.rms_mm * 1e3 << " um, sigma0 " << f.sigma0 << "\n";
+  }
+  console << csv << "\n" << json << "\n";
+  if (p.grid) console << png << "\n";
+  console << xml << "\n";
+
+  summary.plate_id = p.stem;
+  for (const MeasuredPoint& point : p.file.points) {
+    ++summary.counts_by_status[PointStatusName(point.status)];
+    ++summary.counts_by_kind[PointKindName(point.kind)];
+  }
+  if (p.grid) {
+    summary.reseau_rms_um = report.fit.rms_mm * 1e3;
+    summary.scale_x = report.fit.scale_x.value;
+    summary.scale_y = report.fit.scale_y.value;
+  }
+  summary.message = console.str();
+  return summary;
+}
+
+}  // namespace
+
+MeasureSummary RunMeasure(const MeasureRequest& request, const DefinitionRegistry& registry) {
+  try {
+    return Run(request, registry);
+  } catch (...) {
+    RethrowNaming(request.detect.scan);
+  }
+}
+
+}  // namespace platemeter::cli

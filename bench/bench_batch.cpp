@@ -22,12 +22,16 @@
 #include <thread>
 #include <vector>
 
+#include "bench_process.h"
 #include "platemeter/batch/scan_record.h"
 #include "platemeter/grids/registry.h"
 #include "platemeter/samples/simulate.h"
 #include "platemeter/samples/spec.h"
 
 namespace {
+
+using platemeter::bench::RunProcess;
+using platemeter::bench::ToolRun;
 
 namespace fs = std::filesystem;
 using namespace platemeter;
@@ -50,38 +54,6 @@ std::string SpecText(double pixel_um, int seed) {
   return s.str();
 }
 
-struct ToolRun {
-  int exit_code = -1;
-  double seconds = 0.0;
-  double peak_rss_mb = 0.0;
-  double cpu_seconds = 0.0;
-};
-
-// Runs a program as its own process; its wall time, CPU time and peak RSS.
-ToolRun RunProcess(const std::vector<std::string>& args, const std::string& log) {
-  ToolRun run;
-  std::fflush(stdout);
-  std::fflush(stderr);
-  const auto start = std::chrono::steady_clock::now();
-  const pid_t child = fork();
-  if (child == 0) {
-    if (!std::freopen(log.c_str(), "w", stdout) || !std::freopen(log.c_str(), "a", stderr)) _exit(126);
-    std::vector<char*> argv;
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  rusage usage{};
-  wait4(child, &status, 0, &usage);
-  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  run.peak_rss_mb = usage.ru_maxrss / 1024.0;
-  run.cpu_seconds = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
-                    1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  return run;
-}
 
 }  // namespace
 

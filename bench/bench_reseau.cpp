@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_process.h"
 #include "platemeter/core/image.h"
 #include "platemeter/detect/reseau_detector.h"
 #include "platemeter/grids/registry.h"
@@ -35,6 +36,9 @@
 #include "platemeter/samples/spec.h"
 
 namespace {
+
+using platemeter::bench::RunProcess;
+using platemeter::bench::ToolRun;
 
 using namespace platemeter;
 
@@ -196,37 +200,6 @@ struct Stats {
   }
 };
 
-struct ToolRun {
-  bool ok = false;
-  double seconds = 0.0;
-  double peak_rss_mb = 0.0;
-  double cpu_seconds = 0.0;  // user + system: what the wall time would be on one idle core
-};
-
-// Runs a program as its own process, so its time and peak RSS are its own.
-ToolRun RunProcess(const std::vector<std::string>& args, const std::string& log) {
-  ToolRun run;
-  std::fflush(stdout);  // or the child would write our buffered lines again
-  std::fflush(stderr);
-  const auto start = std::chrono::steady_clock::now();
-  const pid_t child = fork();
-  if (child == 0) {
-    if (!std::freopen(log.c_str(), "w", stdout) || !std::freopen(log.c_str(), "a", stderr)) _exit(126);
-    std::vector<char*> argv;
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  rusage usage{};
-  wait4(child, &status, 0, &usage);
-  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  run.peak_rss_mb = usage.ru_maxrss / 1024.0;
-  run.cpu_seconds = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  run.ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  return run;
-}
 
 // Scores the tool's measurement file against the truth and prints one line.
 void Score(const Case& c, const sim::SimulatedPlate& plate, const std::string& scan, const MasterGrid& grid,

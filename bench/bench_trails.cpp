@@ -27,6 +27,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "bench_process.h"
 #include "platemeter/calib/apparent_place.h"
 #include "platemeter/calib/star_catalog.h"
 #include "platemeter/core/image_writer.h"
@@ -37,6 +38,9 @@
 #include "platemeter/samples/spec.h"
 
 namespace {
+
+using platemeter::bench::RunProcess;
+using platemeter::bench::ToolRun;
 
 using namespace platemeter;
 namespace fs = std::filesystem;
@@ -98,34 +102,6 @@ grain_sigma_dn = )" + std::to_string(grain_dn) + R"(
 )";
 }
 
-struct ToolRun {
-  bool ok = false;
-  double seconds = 0.0, cpu_seconds = 0.0, peak_rss_mb = 0.0;
-};
-
-ToolRun RunProcess(const std::vector<std::string>& args, const std::string& log) {
-  ToolRun run;
-  std::fflush(stdout);
-  std::fflush(stderr);
-  const auto start = std::chrono::steady_clock::now();
-  const pid_t child = fork();
-  if (child == 0) {
-    if (!std::freopen(log.c_str(), "w", stdout) || !std::freopen(log.c_str(), "a", stderr)) _exit(126);
-    std::vector<char*> argv;
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  rusage usage{};
-  wait4(child, &status, 0, &usage);
-  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  run.peak_rss_mb = usage.ru_maxrss / 1024.0;
-  run.cpu_seconds = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  run.ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  return run;
-}
 
 double Seconds(const std::string& iso) {
   const calib::UtcInstant t = calib::ParseUtcIso8601(iso), t0 = calib::ParseUtcIso8601(kStartUtc);

@@ -1,3 +1,4 @@
+#include "platemeter/core/markup.h"
 #include "platemeter/batch/summary.h"
 
 #include <charconv>
@@ -35,19 +36,7 @@ std::string CsvField(const std::string& s) {
   return q + "\"";
 }
 
-std::string Html(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
+std::string Html(const std::string& s) { return EscapeMarkup(s); }
 
 // A relative link to OUT/<stem>/<name>; the stem and name are percent-escaped where URLs need it.
 std::string Href(const std::string& stem, const std::string& name) {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "platemeter/core/error.h"
+#include "platemeter/measure/atomic_file.h"
 
 namespace platemeter {
 namespace fs = std::filesystem;
@@ -37,24 +38,7 @@ void WriteSharedFileAtomically(const std::string& path, const std::string& conte
   temp_name += target.filename().string();
   temp_name += ".partial." + std::to_string(::getpid());
   const fs::path temp = target.parent_path() / temp_name;
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error(path, "cannot create the temporary file " + temp.string());
-    out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
-    out.flush();
-    if (!out) {
-      std::error_code ignored;
-      fs::remove(temp, ignored);
-      throw Error(path, "write failed (disk full?)");
-    }
-  }
-  std::error_code ec;
-  fs::rename(temp, target, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(temp, ignored);
-    throw Error(path, "cannot rename into place (" + ec.message() + ")");
-  }
+  WriteFileAtomicallyThrough(path, temp.string(), contents);
 }
 
 }  // namespace platemeter

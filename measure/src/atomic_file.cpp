@@ -7,13 +7,9 @@
 
 namespace platemeter {
 
-void WriteFileAtomically(const std::string& path, std::string_view contents) {
+void WriteFileAtomicallyThrough(const std::string& path, const std::string& temp_path, std::string_view contents) {
   namespace fs = std::filesystem;
-  const fs::path target(path);
-  // Same folder as the target so the rename stays on one file system; the
-  // ".partial." infix is ignored by git (.gitignore) and by the readers.
-  const fs::path temp = target.parent_path() /
-                        ("." + target.stem().string() + ".partial" + target.extension().string());
+  const fs::path target(path), temp(temp_path);
   {
     std::ofstream out(temp, std::ios::binary | std::ios::trunc);
     if (!out) throw Error(path, "cannot create the temporary file " + temp.string());
@@ -32,6 +28,16 @@ void WriteFileAtomically(const std::string& path, std::string_view contents) {
     fs::remove(temp, ignored);
     throw Error(path, "cannot rename into place (" + ec.message() + ")");
   }
+}
+
+void WriteFileAtomically(const std::string& path, std::string_view contents) {
+  namespace fs = std::filesystem;
+  const fs::path target(path);
+  // Same folder as the target so the rename stays on one file system; the
+  // ".partial." infix is ignored by git (.gitignore) and by the readers.
+  const fs::path temp = target.parent_path() /
+                        ("." + target.stem().string() + ".partial" + target.extension().string());
+  WriteFileAtomicallyThrough(path, temp.string(), contents);
 }
 
 }  // namespace platemeter

@@ -1,4 +1,5 @@
 // MicMac MeasuresIm XML export (micmac_export.h).
+#include "platemeter/core/markup.h"
 #include "platemeter/measure/micmac_export.h"
 
 #include <filesystem>
@@ -10,19 +11,7 @@
 namespace platemeter {
 namespace {
 
-std::string Escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
+std::string Escape(const std::string& s) { return EscapeMarkup(s); }
 
 }  // namespace
 

@@ -10,5 +10,8 @@ namespace platemeter {
 // Writes `contents` to `path` through ".<name>.partial.<ext>" and a rename.
 // Throws Error naming `path` on failure (the temporary file is removed).
 void WriteFileAtomically(const std::string& path, std::string_view contents);
+// The same through a given temporary path (same folder as `path`), for writers
+// that need their own temporary name (several processes writing one file).
+void WriteFileAtomicallyThrough(const std::string& path, const std::string& temp_path, std::string_view contents);
 
 }  // namespace platemeter

@@ -36,6 +36,7 @@ bool TrailOptions::Check(std::string* why) const {
   if (!(run_flux_tolerance > 0)) return fail("run_flux_tolerance must be > 0");
   if (min_sibling_images < 1 || !(sibling_window_s >= 0)) return fail("min_sibling_images must be >= 1");
   if (!(clean_radius_spacings >= 0)) return fail("clean_radius_spacings must be >= 0");
+  if (!(sibling_tolerance_px > 0) || !(sibling_tolerance_fraction >= 0)) return fail("sibling_tolerance_px must be > 0");
   return true;
 }
 
@@ -196,6 +197,13 @@ std::vector<std::vector<int>> FindRuns(const Context& c, const Grid& dashes, con
   return runs;
 }
 
+// Whether a detection may hold (or be) a 20 s dash of a star whose dashes measure this flux and
+// length: anything but an image measured fainter than half the dash and shorter than half of it
+// (another star's dot; a dash merged with another image measures at least the dash's flux).
+bool CouldHoldDash(const DetectedStar& d, double dash_flux, double dash_length) {
+  return !(dash_flux > 0 && d.flux_dn > 0 && d.flux_dn < 0.5 * dash_flux && d.length_px < 0.5 * dash_length);
+}
+
 // Track degree the taken images support (span and count), capped by the option.
 int DegreeFor(int n, double span_s, int max_degree) {
   int d = 1;
@@ -256,14 +264,20 @@ Growth Grow(const Context& c, const Grid& all, int t, const std::vector<int>& ru
     const double tol = std::max(c.o.min_tolerance_px, c.o.match_tolerance * spacing_s * rate);
     const PixelPoint q = track.At(ex[j].mid_s);
     int found = -1, count = 0;
+    double nearest = 1e300, second = 1e300;
     all.Near(q.x_px, q.y_px, tol, [&](int i) {
       if (!c.usable[i] || is_used(i) || !Compatible(c, i, ex[j], rate, flux_per_s)) return;
-      found = i, ++count;
+      const double d = Dist(c.p[i], q);
+      if (d < nearest) second = nearest, nearest = d, found = i;
+      else second = std::min(second, d);
+      ++count;
     });
     // Once the track is established its prediction is far better than `tol`: an image off it by more
     // than the prediction allows, with other images around (a crowded field), may be another star's
-    // (this trail's own image missing or merged): not taken.
-    if (count == 1 && ts.size() >= 8 && Dist(c.p[found], q) > c.o.tight_tolerance_px) {
+    // (this trail's own image missing or merged): not taken. Several candidates (a crossing trail):
+    // the nearest is taken when it lies within that limit and every other beyond three times it.
+    double limit = 1e300;
+    if (ts.size() >= 8) {
       double ss = 0;
       for (size_t k = 0; k < ts.size(); ++k) ss += std::pow(Dist(track.At(ts[k]), ps[k]), 2);
       const double rms = std::sqrt(ss / ts.size());
@@ -271,7 +285,11 @@ Growth Grow(const Context& c, const Grid& all, int t, const std::vector<int>& ru
       track.SigmaAt(ex[j].mid_s, &sx, &sy);
       const double chi = std::sqrt(track.reduced_chi2());
       const double sigma_pred = std::hypot(sx, sy) * (chi < 1 ? chi : 1.0);
-      if (Dist(c.p[found], q) > std::max(c.o.tight_tolerance_px, 5.0 * std::hypot(sigma_pred, rms))) {
+      limit = std::max(c.o.tight_tolerance_px, 5.0 * std::hypot(sigma_pred, rms));
+      if (count > 1 && nearest <= limit && second > 3.0 * limit) count = 1;
+    }
+    if (count == 1 && nearest > c.o.tight_tolerance_px) {
+      if (nearest > limit) {
         bool crowded = false;
         all.Near(c.p[found].x_px, c.p[found].y_px, 2.5 * c.o.psf_fwhm_px,
                  [&](int i) { crowded = crowded || (i != found && !is_used(i)); });
@@ -423,6 +441,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   std::vector<std::vector<std::pair<int, int>>> taken_by;  // per decoded chain
   std::vector<int> owner_count(n, 0);
   std::unordered_map<int, double> flux_of;  // decoded chain -> flux per second
+  std::unordered_map<int, bool> before_occupied;  // decoded chain -> an image one dash before its run
+  std::unordered_map<int, std::pair<double, double>> dash_of;  // decoded chain -> its dashes' mean flux, length
   std::unordered_map<int, std::pair<PixelPoint, double>> before_of;  // decoded chain -> (position one dash before
                                                                      // its run, dash spacing)
   for (const std::vector<int>& run : FindRuns(c, dashes, dash_ids)) {
@@ -448,11 +468,13 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       for (int i : run) f.push_back(images[i].flux_dn);
       std::nth_element(f.begin(), f.begin() + f.size() / 2, f.end());
       const double median = f[f.size() / 2];
-      bool same = true;  // (no measured fluxes, median 0: not compared)
+      // Only the end dashes matter (an inner dash blended with a crossing star's image does not
+      // change N); no measured fluxes (median 0): not compared.
+      bool same = true;
       if (median > 0)
-        for (int i : run)
-        same = same && std::abs(images[i].flux_dn - median) <=
-                           options.run_flux_tolerance * median + 4.0 * images[i].sigma_flux_dn;
+        for (int i : {run.front(), run.back()})
+          same = same && std::abs(images[i].flux_dn - median) <=
+                             options.run_flux_tolerance * median + 4.0 * images[i].sigma_flux_dn;
       if (!same) {
         refuse("run_flux");
         continue;
@@ -487,21 +509,37 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       refuse("at_edge");
       continue;
     }
+    // An image there that cannot hold a dash of this star (measured flux under half a dash's and
+    // shorter than half a dash: a faint star's dot) leaves N certain; anything else may be the dash.
     bool occupied = false;
-    all.Near(before.x_px, before.y_px, std::max(options.min_tolerance_px, 0.5 * Dist(a, b)),
-             [&](int) { occupied = true; });
-    if (occupied) {
-      refuse("image_before_run");
-      continue;
-    }
+    double dash_flux = 0, dash_length = 0;
+    for (int i : run) dash_flux += images[i].flux_dn / run.size(), dash_length += images[i].length_px / run.size();
+    all.Near(before.x_px, before.y_px, std::max(options.min_tolerance_px, 0.5 * Dist(a, b)), [&](int i) {
+      if (CouldHoldDash(images[i], dash_flux, dash_length)) occupied = true;
+    });
+    // Occupied: the number needs its siblings' confirmation (step 4); no clean-field exception.
+    if (occupied) before_occupied[result.chains.size()] = true;
     before_of[result.chains.size()] = {before, Dist(a, b)};
+    dash_of[result.chains.size()] = {dash_flux, dash_length};
     flux_of[result.chains.size()] = flux_per_s;
     tc.trail = t + 1;
     tc.rate_px_per_s = grown[dir].rate_px_per_s;
     tc.missed_exposures = grown[dir].missed;
     tc.images.clear();
-    for (const auto& [j, i] : grown[dir].taken) tc.images.push_back(i), ++owner_count[i];
-    taken_by.push_back(grown[dir].taken);
+    // An inner dash of the run blended with another image (its flux off the run's) keeps the run's
+    // count but is not tagged itself: its position is not this star's alone.
+    std::vector<std::pair<int, int>> taken;
+    for (const auto& [j, i] : grown[dir].taken) {
+      if (j < tc.leading_dashes && flux_per_s > 0 &&
+          std::abs(images[i].flux_dn - flux_per_s * c.per_trail[t][j].duration_s) >
+              options.run_flux_tolerance * flux_per_s * c.per_trail[t][j].duration_s + 4.0 * images[i].sigma_flux_dn) {
+        result.images[i].reason = "blended";
+        continue;
+      }
+      taken.push_back({j, i});
+      tc.images.push_back(i), ++owner_count[i];
+    }
+    taken_by.push_back(taken);
     result.chains.push_back(tc);
   }
   // An image taken by two trails (crossing trails) belongs to neither.
@@ -551,12 +589,14 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     }
     // Another star's images taken along the way (a crowded field) leave the track off most of them;
     // a trail's own images sit on it to their measuring precision.
+    double median_residual = 0;
     {
       std::vector<double> res;
       for (const auto& [j, i] : kept)
         if (!result.images[i].bad) res.push_back(result.images[i].residual_px);
       std::nth_element(res.begin(), res.begin() + res.size() / 2, res.end());
       const double limit = std::max(options.max_median_residual_px, options.max_median_residual_fwhm * options.psf_fwhm_px);
+      if (!res.empty()) median_residual = res[res.size() / 2];
       if (res.empty() || res[res.size() / 2] > limit) {
         for (const auto& [j, i] : kept) {
           TrailImage& ti = result.images[i];
@@ -574,54 +614,71 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     // is likely another star's (a crowded field): not tagged ("off_track"). Alone, it is the trail's own
     // displaced image: tagged, flagged bad. An image the track merely follows (leverage above
     // max_leverage: beyond a long gap at the trail's end) cannot be checked: not tagged ("unverified").
-    bool dropped = false;
-    {
-      std::vector<std::pair<int, int>> good;
-      tc.images.clear();
-      for (const auto& [j, i] : kept) {
-        TrailImage& ti = result.images[i];
-        bool crowded = false;
-        if (ti.bad || ti.residual_px > options.tight_tolerance_px)
-          all.Near(c.p[i].x_px, c.p[i].y_px, options.crowd_radius_fwhm * options.psf_fwhm_px, [&](int o) {
-            if (o != i && result.images[o].chain != cid) crowded = true;
-          });
-        double hx = 0, hy = 0;
-        if (!ti.bad) {
-          const DetectedStar& d = images[i];
-          tracks[cid].LeverageAt(ti.mid_s, std::hypot(d.point.sigma_x_px > 0 ? d.point.sigma_x_px : 0.05, options.position_floor_px),
-                                 std::hypot(d.point.sigma_y_px > 0 ? d.point.sigma_y_px : 0.05, options.position_floor_px), &hx, &hy);
-        }
-        const bool unverified = std::max(hx, hy) > options.max_leverage;
-        if (crowded || unverified) {
-          (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
-          if (ti.bad) --tc.bad_images;
-          ti = TrailImage{};
-          ti.reason = unverified ? "unverified" : "off_track";
-          dropped = true;
-          continue;
-        }
-        good.push_back({j, i});
-        tc.images.push_back(i);
+    bool refused = false;
+    for (int pass = 0; pass < 3 && !refused; ++pass) {  // until nothing more is dropped
+      if (pass > 0) {  // the residuals of the refitted track
+        std::vector<double> res;
+        for (const auto& [j, i] : kept)
+          if (!result.images[i].bad) res.push_back(result.images[i].residual_px);
+        std::nth_element(res.begin(), res.begin() + res.size() / 2, res.end());
+        median_residual = res.empty() ? 0.0 : res[res.size() / 2];
       }
-      kept = good;
-    }
-    if (dropped) {  // the track without them
-      tc.bad_images = 0;
-      for (const auto& [j, i] : kept) result.images[i].bad = false, result.images[i].reason.clear();
-      if (static_cast<int>(kept.size()) < tc.leading_dashes + options.min_exposures_after_run / 2 ||
-          !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
+      bool dropped = false;
+      {
+        std::vector<std::pair<int, int>> good;
+        tc.images.clear();
         for (const auto& [j, i] : kept) {
           TrailImage& ti = result.images[i];
-          (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
-          ti = TrailImage{};
-          ti.reason = "off_track";
+          bool crowded = false;
+          // (an image the detector split from a neighbour, `blended`: off the track already beyond 3 median
+          // residuals of the trail, 3.5 sigma, and 0.1 px)
+          const bool split = (images[i].flags & kStarBlended) != 0;
+          if (ti.bad || ti.residual_px > (split ? std::min(options.tight_tolerance_px, std::max(0.1, 3.0 * median_residual))
+                                                : options.tight_tolerance_px))
+            all.Near(c.p[i].x_px, c.p[i].y_px, options.crowd_radius_fwhm * options.psf_fwhm_px, [&](int o) {
+              if (o != i && result.images[o].chain != cid) crowded = true;
+            });
+          double hx = 0, hy = 0;
+          if (!ti.bad) {
+            const DetectedStar& d = images[i];
+            tracks[cid].LeverageAt(ti.mid_s, std::hypot(d.point.sigma_x_px > 0 ? d.point.sigma_x_px : 0.05, options.position_floor_px),
+                                   std::hypot(d.point.sigma_y_px > 0 ? d.point.sigma_y_px : 0.05, options.position_floor_px), &hx, &hy);
+          }
+          const bool unverified = std::max(hx, hy) > options.max_leverage;
+          if (crowded || unverified) {
+            (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
+            if (ti.bad) --tc.bad_images;
+            ti = TrailImage{};
+            ti.reason = unverified ? "unverified" : "off_track";
+            dropped = true;
+            continue;
+          }
+          good.push_back({j, i});
+          tc.images.push_back(i);
         }
-        tc.trail = 0;
-        tc.reason = "off_track";
+        kept = good;
+      }
+      if (!dropped) break;
+      {  // the track without them
         tc.bad_images = 0;
-        continue;
+        for (const auto& [j, i] : kept) result.images[i].bad = false, result.images[i].reason.clear();
+        if (static_cast<int>(kept.size()) < tc.leading_dashes + options.min_exposures_after_run / 2 ||
+            !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
+          for (const auto& [j, i] : kept) {
+            TrailImage& ti = result.images[i];
+            (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
+            ti = TrailImage{};
+            ti.reason = "off_track";
+          }
+          tc.trail = 0;
+          tc.reason = "off_track";
+          tc.bad_images = 0;
+          refused = true;
+          break;
+        }
       }
     }
+    if (refused) continue;
     kept_of[cid] = kept;
     result.bad_images += tc.bad_images;
   }
@@ -732,7 +789,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         if (bounded && (q.x_px < options.image_min_px.x_px || q.y_px < options.image_min_px.y_px ||
                         q.x_px > options.image_max_px.x_px || q.y_px > options.image_max_px.y_px))
           continue;
-        const double tol = options.join_tolerance_px + options.join_tolerance_fraction * Dist(q, end);
+        const double tol = options.sibling_tolerance_px + options.sibling_tolerance_fraction * Dist(q, end);
         const PixelPoint v = r.track.VelocityAt(e.mid_s);
         const double rate = std::hypot(v.x_px, v.y_px);
         bool hit = false;
@@ -758,11 +815,14 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     if (joined[k] || (own >= options.min_sibling_images && 3 * alt <= own)) continue;
     // Unconfirmed: kept only where nothing could have hidden a leading dash (or posed as one).
     const auto& [before, spacing] = before_of.at(k);
+    const auto& [dash_flux, dash_length] = dash_of.at(k);
     bool clean = true;
     all.Near(before.x_px, before.y_px, options.clean_radius_spacings * spacing, [&](int i) {
-      if (result.images[i].chain != k) clean = false;
+      if (result.images[i].chain != k && CouldHoldDash(images[i], dash_flux, dash_length)) clean = false;
     });
-    if (!clean) doubtful[k] = true, joined[k] = false, result.chains[k].reason = "unconfirmed";
+    if (!clean || before_occupied[k])
+      doubtful[k] = true, joined[k] = false,
+      result.chains[k].reason = before_occupied[k] ? "image_before_run" : "unconfirmed";
   }
   if (options.require_joined)
     for (int k : decoded_ids)

@@ -6,8 +6,11 @@
 //      collinear (30 s apart; with measured lengths, spacing = 1.5 x a dash's
 //      length). A run's length N numbers the trail (trail t has
 //      leading_dashes[t]); a run is refused when the position one dash before
-//      it is off the scan (at_edge) or holds an image (image_before_run: a dash
-//      not seen as one would change N);
+//      it is off the scan (at_edge); an image there that could hold a dash
+//      (a dash not seen as one would change N) leaves the number to the
+//      sibling check of step 4 (image_before_run when unconfirmed). With
+//      measured segments a dash's neighbours lie along its own direction; two
+//      candidates on a side (a crossing) link nothing;
 //   2. grows each run, in both time directions, exposure by exposure along
 //      the trail: a smooth track position(mid time) fitted to the images taken
 //      so far predicts the next exposure; the one image within the tolerance
@@ -28,6 +31,13 @@
 //      without trace makes trail N+1 look like trail N) are refused
 //      ("doubtful_number"). A lone trail (no other trail of its star decoded)
 //      cannot be checked so: require_joined refuses those too.
+// Crowded fields (docs/trails.md): the run's and every taken image's flux must
+// fit the exposure's duration; an established track takes only images within
+// its prediction; trails off most of their images, images off the track amid
+// other images and images the track merely follows are refused; and a trail's
+// number must be confirmed by the raw images on its sibling trails' predicted
+// exposures (or by a join, or by a clean field around its run). Unassigned
+// with a reason is fine; wrong is not.
 #include <string>
 #include <vector>
 
@@ -74,7 +84,10 @@ struct TrailOptions {
                                        // more than this (and 5 sigma of the prediction) is not taken / not tagged
   double max_leverage = 0.8;           // an image the track follows this much (hat-matrix diagonal) is not tagged
   int min_sibling_images = 5;          // raw images on a sibling trail's predicted exposures that confirm a number
-  double sibling_window_s = 300.0;     // s; sibling exposures compared: within the break plus this of the trail's end
+  double sibling_window_s = 600.0;     // s; sibling exposures compared: within the break plus this of the trail's end
+  double sibling_tolerance_px = 0.5;   // px; a sibling exposure's image must lie within this plus
+  double sibling_tolerance_fraction = 0.002;  // this fraction of the extrapolation distance (correct joins: 0.01-0.45 px;
+                                       // under a wrong number the prediction lands 10 s x the rate off a sibling's dot)
   double clean_radius_spacings = 1.0;  // a trail confirmed by no sibling is kept only when no other image lies within
                                        // this many dash spacings of the position one dash before its run
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
@@ -110,7 +123,7 @@ struct TrailImage {
   std::string reason;              // why not assigned: not_star, unlinked, at_edge, image_before_run,
                                    // short_pattern, ambiguous, contested, leading_dashes_incomplete,
                                    // doubtful_number, lone_trail, poor_track, unconfirmed, run_flux,
-                                   // off_track, unverified;
+                                   // off_track, unverified, blended;
                                    // for bad (still assigned) images: bad_fit
 };
 

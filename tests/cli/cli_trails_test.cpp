@@ -1,0 +1,120 @@
+// `platemeter detect --stars --trails-start-utc` end to end on a simulated
+// Orbigon star plate (12.5 um pixels, catalog stars to V = 3.5): every trail
+// row the tool writes is checked against the simulator's truth file (nearest
+// truth trail image within 1.5 px: same kind, trail, dot or dash index and
+// mid-time; one truth star per found star), and the share of dots tagged.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "platemeter/calib/star_catalog.h"
+#include "platemeter/measure/measurement_file.h"
+#include "support/test_support.h"
+
+namespace platemeter {
+namespace {
+
+using testing::RunPlatemeter;
+using testing::TempDir;
+
+// The photometry of tests/detect/trail_linker_test.cpp: the 0.6 s dots of the faintest stars at SNR ~6.
+constexpr const char* kSpec = R"(
+name = "trails"
+camera = "orbigon"
+seed = 5
+[output]
+pixel_size_um = 12.5
+[stars]
+fwhm_um = 30
+reference_magnitude = 3.5
+reference_peak_dn = 2500
+[star_field]
+latitude_deg = 39.03
+longitude_deg = -76.93
+height_m = 50
+start_utc = "1972-05-12T05:30:00Z"
+magnitude_limit = 3.5
+[noise]
+sensor_sigma_dn = 20
+grain_sigma_dn = 20
+)";
+
+// Seconds after 05:30:00 of "1972-05-12Thh:mm:ss.sssZ" (independent of the tool).
+double SecondsAfter0530(const std::string& iso) {
+  int h = 0, mi = 0;
+  double s = 0;
+  EXPECT_EQ(std::sscanf(iso.c_str() + 11, "%d:%d:%lf", &h, &mi, &s), 3) << iso;
+  return (h - 5) * 3600.0 + (mi - 30) * 60.0 + s;
+}
+
+TEST(CliTrails, DetectWritesTimeTaggedTrailDotsThatMatchTheTruth) {
+  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
+    GTEST_FAIL() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
+  TempDir dir;
+  std::ofstream(dir.file("trails.toml")) << kSpec;
+  ASSERT_EQ(RunPlatemeter("simulate '" + dir.file("trails.toml") + "' -o '" + dir.file("sim") + "' -q").exit_code, 0);
+  const auto r = RunPlatemeter("detect '" + dir.file("sim/trails.tif") +
+                               "' --camera orbigon --orientation 0 --stars --star-fwhm-px 2.4 "
+                               "--trails-start-utc 1972-05-12T05:30:00Z -o '" + dir.file("out") + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const MeasurementFile truth = ReadMeasurementFile(dir.file("sim/trails.truth.csv"));
+  const MeasurementFile found = ReadMeasurementFile(dir.file("out/trails.measurements.csv"));
+
+  // Truth trail images; the dots counted are those of whole trails (the simulator writes no image outside
+  // the format): 25 dots and the trail's N = 1 + trail number leading dashes plus 4 separators (Table 1).
+  std::vector<const MeasuredPoint*> images;
+  std::map<std::string, std::pair<long, long>> dots_dashes;  // star + trail -> (dots, dashes)
+  for (const MeasuredPoint& t : truth.points)
+    if (t.kind == PointKind::kTrailDot || t.kind == PointKind::kTrailDash) {
+      images.push_back(&t);
+      auto& [dots, dashes] = dots_dashes[t.star_id + "/" + t.trail];
+      (t.kind == PointKind::kTrailDot ? dots : dashes)++;
+    }
+  auto whole = [&](const MeasuredPoint& t) {
+    const auto [dots, dashes] = dots_dashes[t.star_id + "/" + t.trail];
+    return dots == 25 && dashes == std::stol(t.trail.substr(1)) + 1 + 4;
+  };
+  long truth_dots = 0;
+  for (const MeasuredPoint* t : images) truth_dots += t->kind == PointKind::kTrailDot && whole(*t);
+  ASSERT_GT(truth_dots, 300);
+
+  long right_dots = 0, wrong = 0, rows = 0;
+  std::map<std::string, std::set<std::string>> truth_stars_of;
+  std::set<std::string> ids;
+  for (const MeasuredPoint& m : found.points) {
+    if (m.kind != PointKind::kTrailDot && m.kind != PointKind::kTrailDash) continue;
+    ++rows;
+    EXPECT_TRUE(ids.insert(m.id).second) << m.id;
+    EXPECT_EQ(m.id, m.star_id + "-" + m.trail + (m.kind == PointKind::kTrailDot ? "-D" : "-L") + std::to_string(*m.dot));
+    const MeasuredPoint* best = nullptr;
+    double bd = 1.5;
+    for (const MeasuredPoint* t : images) {
+      const double d = std::hypot(*t->x_px - *m.x_px, *t->y_px - *m.y_px);
+      if (d < bd) bd = d, best = t;
+    }
+    ASSERT_NE(best, nullptr) << m.id << " has no truth image within 1.5 px";
+    truth_stars_of[m.star_id].insert(best->star_id);
+    const bool ok = best->kind == m.kind && best->trail == m.trail && best->dot == m.dot &&
+                    std::abs(SecondsAfter0530(best->mid_time_utc) - SecondsAfter0530(m.mid_time_utc)) < 0.0015;
+    if (!ok) {
+      ++wrong;
+      ADD_FAILURE() << m.id << " at " << m.mid_time_utc << " is " << best->id << " at " << best->mid_time_utc;
+    } else if (m.kind == PointKind::kTrailDot && m.status == PointStatus::kMeasured && whole(*best)) {
+      ++right_dots;
+      EXPECT_LT(bd, 0.2) << m.id << ": the track-fitted position";
+    }
+  }
+  for (const auto& [star, truths] : truth_stars_of) EXPECT_EQ(truths.size(), 1u) << star << " mixes truth stars";
+  std::printf("[cli trails] %ld trail rows, %ld of %ld dots of whole trails right (%.1f %%), %ld wrong, %zu stars\n", rows,
+              right_dots, truth_dots, 100.0 * right_dots / truth_dots, wrong, truth_stars_of.size());
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GE(right_dots, 0.9 * truth_dots);
+}
+
+}  // namespace
+}  // namespace platemeter

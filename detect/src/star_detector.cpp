@@ -88,14 +88,31 @@ Windowed WindowedCentroid(const std::vector<FitPixel>& pixels, double x, double 
   return r;
 }
 
+// A measured image at a fitted position: the fields every fit fills.
+DetectedStar MeasuredImage(double x_px, double y_px, double sigma_x_px, double sigma_y_px, double correlation_xy,
+                           double flux_dn, double sigma_flux_dn, double background_dn) {
+  DetectedStar d;
+  d.point.kind = PointKind::kStar;
+  d.point.status = PointStatus::kMeasured;
+  d.point.position_px = {x_px, y_px};
+  d.point.sigma_x_px = sigma_x_px;
+  d.point.sigma_y_px = sigma_y_px;
+  d.point.correlation_xy = correlation_xy;
+  d.flux_dn = flux_dn;
+  d.sigma_flux_dn = sigma_flux_dn;
+  d.background_dn = background_dn;
+  d.snr = sigma_flux_dn > 0 ? flux_dn / sigma_flux_dn : 0.0;
+  return d;
+}
+
+// A rejected image; `why` (line, cross, masked, shape) becomes its reason, the flag says defect.
 DetectedStar Defect(double x, double y, const std::string& why) {
   DetectedStar d;
   d.point.kind = PointKind::kStar;
   d.point.status = PointStatus::kRejected;
-  d.point.reason = "defect";
+  d.point.reason = why;
   d.point.position_px = {x, y};
   d.flags = kStarDefect;
-  (void)why;
   return d;
 }
 
@@ -193,21 +210,12 @@ void MeasureSegment(const SweepMoments& m, const std::vector<FitPixel>& pixels, 
   }
   if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn) return;
   if (g.x_px < window.x0 || g.x_px > window.x1 || g.y_px < window.y0 || g.y_px > window.y1) return;
-  DetectedStar d;
-  d.point.kind = PointKind::kStar;
-  d.point.status = PointStatus::kMeasured;
-  d.point.position_px = {g.x_px, g.y_px};
-  d.point.sigma_x_px = g.sigma_x_px;
-  d.point.sigma_y_px = g.sigma_y_px;
-  d.point.correlation_xy = g.correlation_xy;
-  d.flux_dn = g.flux_dn;
-  d.sigma_flux_dn = g.sigma_flux_dn;
+  DetectedStar d = MeasuredImage(g.x_px, g.y_px, g.sigma_x_px, g.sigma_y_px, g.correlation_xy, g.flux_dn,
+                                 g.sigma_flux_dn, mesh.LevelAt(g.x_px, g.y_px - y0_abs) + sign * fit.offset_dn);
   // Peak of the swept PSF (the sweep's middle).
   d.peak_dn = g.flux_dn / (std::sqrt(2.0 * M_PI) * g.sigma_px) *
               std::erf(0.5 * g.length_px / (std::sqrt(2.0) * g.sigma_px)) / g.length_px;
-  d.background_dn = mesh.LevelAt(g.x_px, g.y_px - y0_abs) + sign * fit.offset_dn;
   d.fwhm_px = g.sigma_px * kFwhmPerSigma;
-  d.snr = g.sigma_flux_dn > 0 ? g.flux_dn / g.sigma_flux_dn : 0.0;
   d.length_px = g.length_px;
   d.sigma_length_px = g.sigma_length_px;
   d.angle_deg = g.angle_rad * 180.0 / M_PI;
@@ -219,20 +227,11 @@ void MeasureSegment(const SweepMoments& m, const std::vector<FitPixel>& pixels, 
   if (fit.has_point) {
     const star_internal::FittedPoint& q = fit.point;
     d.flags |= kStarBlended;
-    DetectedStar e;
-    e.point.kind = PointKind::kStar;
-    e.point.status = PointStatus::kMeasured;
-    e.point.position_px = {q.x_px, q.y_px};
-    e.point.sigma_x_px = q.sigma_x_px;
-    e.point.sigma_y_px = q.sigma_y_px;
-    e.point.correlation_xy = q.correlation_xy;
-    e.flux_dn = q.flux_dn;
-    e.sigma_flux_dn = q.sigma_flux_dn;
+    DetectedStar e = MeasuredImage(q.x_px, q.y_px, q.sigma_x_px, q.sigma_y_px, q.correlation_xy, q.flux_dn,
+                                   q.sigma_flux_dn, mesh.LevelAt(q.x_px, q.y_px - y0_abs) + sign * fit.offset_dn);
     const double se2 = g.sigma_px * g.sigma_px + 1.0 / 12.0;
     e.peak_dn = q.flux_dn / (2.0 * M_PI * se2);
-    e.background_dn = mesh.LevelAt(q.x_px, q.y_px - y0_abs) + sign * fit.offset_dn;
     e.fwhm_px = d.fwhm_px;
-    e.snr = q.sigma_flux_dn > 0 ? q.flux_dn / q.sigma_flux_dn : 0.0;
     e.flags = kStarBlended | (truncated ? kStarTruncated : 0u);
     result->push_back(e);
   }
@@ -459,19 +458,10 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
       }
       if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn) continue;
       if (g.x_px < x0 - 0.5 || g.x_px > x1 - 0.5 || g.y_px < b.y0_abs + y0 - 0.5 || g.y_px > b.y0_abs + y1 - 0.5) continue;
-      DetectedStar d;
-      d.point.kind = PointKind::kStar;
-      d.point.status = PointStatus::kMeasured;
-      d.point.position_px = {g.x_px, g.y_px};
-      d.point.sigma_x_px = g.sigma_x_px;
-      d.point.sigma_y_px = g.sigma_y_px;
-      d.point.correlation_xy = g.correlation_xy;
-      d.flux_dn = g.flux_dn;
-      d.sigma_flux_dn = g.sigma_flux_dn;
+      DetectedStar d = MeasuredImage(g.x_px, g.y_px, g.sigma_x_px, g.sigma_y_px, g.correlation_xy, g.flux_dn,
+                                     g.sigma_flux_dn, mesh.LevelAt(g.x_px, g.y_px - b.y0_abs) + sign * fit.offset_dn);
       d.peak_dn = g.flux_dn / (2.0 * M_PI * g.sigma_px * g.sigma_px);
-      d.background_dn = mesh.LevelAt(g.x_px, g.y_px - b.y0_abs) + sign * fit.offset_dn;
       d.fwhm_px = g.sigma_px * kFwhmPerSigma;
-      d.snr = g.sigma_flux_dn > 0 ? g.flux_dn / g.sigma_flux_dn : 0.0;
       if (!blended) d.ellipticity = Ellipticity(pixels, g.x_px, g.y_px, fit.offset_dn, std::max(g.sigma_px, psf_sigma));
       if (!blended && o.windowed_centroid) {
         const Windowed w = WindowedCentroid(pixels, g.x_px, g.y_px, fit.offset_dn, psf_sigma, fit.residual_sigma_dn);

@@ -548,6 +548,18 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     if (result.chains[k].trail > 0) chain_of_taken.push_back(static_cast<int>(k));
   std::vector<Track> tracks(result.chains.size());
   std::vector<std::vector<std::pair<int, int>>> kept_of(result.chains.size());  // (exposure, image) per chain
+  // A trail refused after its images were tagged: the tags are taken back, the images keep `reason`.
+  auto refuse = [&result](TrailChain& tc, const std::vector<std::pair<int, int>>& kept, const std::string& reason) {
+    for (const auto& [j, i] : kept) {
+      TrailImage& ti = result.images[i];
+      (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
+      ti = TrailImage{};
+      ti.reason = reason;
+    }
+    tc.trail = 0;
+    tc.reason = reason;
+    tc.bad_images = 0;
+  };
   for (size_t g = 0; g < taken_by.size(); ++g) {
     const int cid = chain_of_taken[g];
     TrailChain& tc = result.chains[cid];
@@ -576,15 +588,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     // 3. The sidereal fit (a trail left with too few images after the contested ones is refused).
     if (static_cast<int>(kept.size()) < tc.leading_dashes + options.min_exposures_after_run / 2 ||
         !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
-      for (const auto& [j, i] : kept) {
-        TrailImage& ti = result.images[i];
-        (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
-        ti = TrailImage{};
-        ti.reason = "contested";
-      }
-      tc.trail = 0;
-      tc.reason = "contested";
-      tc.bad_images = 0;
+      refuse(tc, kept, "contested");
       continue;
     }
     // Another star's images taken along the way (a crowded field) leave the track off most of them;
@@ -598,15 +602,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       const double limit = std::max(options.max_median_residual_px, options.max_median_residual_fwhm * options.psf_fwhm_px);
       if (!res.empty()) median_residual = res[res.size() / 2];
       if (res.empty() || res[res.size() / 2] > limit) {
-        for (const auto& [j, i] : kept) {
-          TrailImage& ti = result.images[i];
-          (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
-          ti = TrailImage{};
-          ti.reason = "poor_track";
-        }
-        tc.trail = 0;
-        tc.reason = "poor_track";
-        tc.bad_images = 0;
+        refuse(tc, kept, "poor_track");
         continue;
       }
     }
@@ -664,15 +660,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         for (const auto& [j, i] : kept) result.images[i].bad = false, result.images[i].reason.clear();
         if (static_cast<int>(kept.size()) < tc.leading_dashes + options.min_exposures_after_run / 2 ||
             !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
-          for (const auto& [j, i] : kept) {
-            TrailImage& ti = result.images[i];
-            (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
-            ti = TrailImage{};
-            ti.reason = "off_track";
-          }
-          tc.trail = 0;
-          tc.reason = "off_track";
-          tc.bad_images = 0;
+          refuse(tc, kept, "off_track");
           refused = true;
           break;
         }

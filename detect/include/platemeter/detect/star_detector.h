@@ -73,7 +73,7 @@ struct StarDetectorOptions {
 };
 
 struct DetectedStar {
-  DetectedPoint point;          // kind star; measured, or rejected with reason "defect"
+  DetectedPoint point;          // kind star; measured, or rejected (flag defect) with reason line, cross, masked or shape
   double flux_dn = 0.0;         // DN px^2; total flux of the fitted Gaussian (positive contrast)
   double sigma_flux_dn = 0.0;   // DN px^2; formal
   double peak_dn = 0.0;         // DN; fitted peak contrast

@@ -317,7 +317,7 @@ int main(int argc, char** argv) {
   // ---- score
   const TruthIndex index(truth_images, 4.0);
   std::set<const TruthImage*> right;
-  long wrong = 0, no_truth = 0, tagged = 0;
+  long wrong = 0, no_truth = 0, tagged = 0, blend_right = 0, flagged_bad = 0;
   std::map<std::string, std::set<int>> truth_stars_of;  // found star -> truth stars
   std::map<int, std::set<std::string>> found_stars_of;  // truth star -> found stars
   std::map<const TruthImage*, std::string> found_star_of_dot;
@@ -325,16 +325,36 @@ int main(int argc, char** argv) {
   long n_err = 0;
   for (const MeasuredPoint& m : measured.points) {
     if (m.kind != PointKind::kTrailDot && m.kind != PointKind::kTrailDash) continue;
+    // A tagged image the track fit flagged bad (displaced: a blend, a defect on it) is its trail's, but its
+    // measured position is not: counted apart.
+    if (m.status != PointStatus::kMeasured) {
+      ++flagged_bad;
+      continue;
+    }
     ++tagged;
     const TruthImage* t = index.Nearest(*m.x_px, *m.y_px, 1.5);
     if (!t) {
-      ++no_truth;
+      if (++no_truth <= 5) std::printf("  no truth image within 1.5 px: %s at %.2f %.2f\n", m.id.c_str(), *m.x_px, *m.y_px);
       continue;
     }
     truth_stars_of[m.star_id].insert(t->star);
     found_stars_of[t->star].insert(m.star_id);
-    const bool ok = t->dot == (m.kind == PointKind::kTrailDot) && "T" + std::to_string(t->trail) == m.trail &&
-                    t->index == m.dot && std::abs(t->mid_s - Seconds(m.mid_time_utc)) < 0.002;
+    auto tag_of = [&](const TruthImage& u) {
+      return u.dot == (m.kind == PointKind::kTrailDot) && "T" + std::to_string(u.trail) == m.trail && u.index == m.dot &&
+             std::abs(u.mid_s - Seconds(m.mid_time_utc)) < 0.002;
+    };
+    const bool ok = tag_of(*t);
+    // Two images within half a FWHM are one detection (a blend): a tag right for the other one is reported
+    // apart, neither right nor wrong.
+    bool blend_ok = false;
+    if (!ok)
+      index.ForNear(*m.x_px, *m.y_px, [&](const TruthImage& u) {
+        blend_ok = blend_ok || (std::hypot(u.x_px - *m.x_px, u.y_px - *m.y_px) < 0.5 * fwhm_px_value && tag_of(u));
+      });
+    if (blend_ok) {
+      ++blend_right;
+      continue;
+    }
     if (!ok) {
       ++wrong;
       if (wrong <= 10)
@@ -364,8 +384,10 @@ int main(int argc, char** argv) {
   }
   std::printf("platemeter detect: %.1f s wall, %.1f s CPU, peak RSS %.0f MB, %.1f Mpx/s\n", run.seconds,
               run.cpu_seconds, run.peak_rss_mb, width * height * 1e-6 / run.seconds);
-  std::printf("trail images tagged: %ld; without a truth image within 1.5 px: %ld; wrong trail/dot/time: %ld\n",
-              tagged, no_truth, wrong);
+  std::printf("trail images tagged: %ld (and %ld flagged bad by the track fit); without a truth image within 1.5 px: "
+              "%ld; wrong trail/dot/time: %ld; blends (another star's image within FWHM/2) tagged right for the other "
+              "image: %ld\n",
+              tagged, flagged_bad, no_truth, wrong, blend_right);
   std::printf("found stars mixing truth stars: %ld; truth stars split over several found stars: %ld\n", mixed, split);
   auto pct = [](long a, long b) { return 100.0 * a / std::max(1L, b); };
   std::printf("MEASURABLE DOTS (V <= %.1f): %ld of %ld right (trail, dot, time) = %.2f %%; also in a found star "
@@ -375,6 +397,42 @@ int main(int argc, char** argv) {
   std::printf("ALL DOTS of whole trails: %zu of %ld right = %.2f %%; with the right star: %ld = %.2f %%\n", right.size(),
               whole_dots, pct(static_cast<long>(right.size()), whole_dots), right_whole_star,
               pct(right_whole_star, whole_dots));
+  // The measurable dots not right: the detection's reason (`trail:<reason>` on an unassigned image), and
+  // whether another trail of the star, or another dot of the same trail, was tagged right.
+  {
+    std::set<std::pair<int, int>> trails_right;
+    std::set<int> stars_right;
+    for (const TruthImage* t : right) trails_right.insert({t->star, t->trail}), stars_right.insert(t->star);
+    std::vector<const MeasuredPoint*> points;
+    std::vector<TruthImage> at;  // the measured points as a searchable set (index = position in `points`)
+    for (const MeasuredPoint& m : measured.points)
+      if (m.x_px && m.y_px && (m.kind == PointKind::kStar || m.kind == PointKind::kTrailDot || m.kind == PointKind::kTrailDash)) {
+        TruthImage u;
+        u.x_px = *m.x_px, u.y_px = *m.y_px, u.star = static_cast<int>(points.size());
+        points.push_back(&m);
+        at.push_back(u);
+      }
+    const TruthIndex found_index(at, 4.0);
+    std::map<std::string, long> lost;
+    for (const TruthImage& t : truth_images) {
+      if (!counted(t) || right.count(&t)) continue;
+      const TruthImage* f = found_index.Nearest(t.x_px, t.y_px, 1.5);
+      std::string why = "not detected";
+      if (f) {
+        const MeasuredPoint& m = *points[f->star];
+        why = m.kind != PointKind::kStar ? "tagged as another image" : "no reason";
+        for (const std::string& flag : m.flags)
+          if (m.kind == PointKind::kStar && flag.rfind("trail:", 0) == 0) why = flag.substr(6);
+      }
+      why += trails_right.count({t.star, t.trail}) ? " (trail partly right)" : stars_right.count(t.star) ? " (another trail of the star right)" : " (nothing of the star right)";
+      ++lost[why];
+    }
+    std::printf("measurable dots not right, by the detection's reason:\n");
+    std::vector<std::pair<long, std::string>> rows;
+    for (const auto& [why, n] : lost) rows.push_back({n, why});
+    std::sort(rows.rbegin(), rows.rend());
+    for (const auto& [n, why] : rows) std::printf("  %6ld %s\n", n, why.c_str());
+  }
   // All dots of whole trails by SNR bin (what is lost, and where).
   const double edges[] = {5, 10, 20, 50, 100, 1e300};
   for (int b = 0; b + 1 < 6; ++b) {

@@ -30,6 +30,18 @@ double MaxTrailRate_px_per_s(const DetectContext& context) {
   return f_mm * kSiderealRate_rad_per_s * sec2 * 1e3 / context.pixel_size_um;
 }
 
+// The camera's format (centred on its reseau's origin) through the reseau's plate-to-pixel similarity:
+// nothing is exposed outside it (a trail entering the format has lost its first dashes there). Empty
+// without a placed reseau or a format size.
+std::vector<PixelPoint> ExposedOutline_px(const DetectContext& context) {
+  if (!context.camera || !context.reseau || !context.reseau->found || context.camera->format_width_mm <= 0 ||
+      context.camera->format_height_mm <= 0)
+    return {};
+  const double w = 0.5 * context.camera->format_width_mm, h = 0.5 * context.camera->format_height_mm;
+  const PlateToPixel& m = context.reseau->plate_to_pixel;
+  return {m.Apply(-w, -h), m.Apply(w, -h), m.Apply(w, h), m.Apply(-w, h)};
+}
+
 DutyCycleScheduleOptions TrailSchedule(const TrailRequest& trails) {
   DutyCycleScheduleOptions schedule;
   schedule.start_s = 0.0;  // times count from the plate's first opening
@@ -121,6 +133,7 @@ StageOutput RunStarStage(const DetectContext& context) {
     trail_options.psf_fwhm_px = options.psf_fwhm_px;
     trail_options.image_min_px = {0.0, 0.0};
     trail_options.image_max_px = {context.image.info().width_px - 1.0, context.image.info().height_px - 1.0};
+    trail_options.exposed_outline_px = ExposedOutline_px(context);
   }
   const std::vector<DetectedStar> stars = DetectStars(context.image, options);
 

@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <opencv2/imgproc.hpp>
 
 #include "platemeter/core/error.h"
@@ -205,7 +206,10 @@ void MeasureSegment(const SweepMoments& m, const std::vector<FitPixel>& pixels, 
     return;
   }
   if (g.length_px > (1.0 + o.dash_length_tolerance) * o.max_dash_length_px + o.psf_fwhm_px) {
-    result->push_back(Defect(g.x_px, g.y_px, "line"));
+    DetectedStar line = Defect(g.x_px, g.y_px, "line");
+    line.length_px = g.length_px;  // its extent: a trail linker asks what it may hide
+    line.angle_deg = g.angle_rad * 180.0 / std::numbers::pi;
+    result->push_back(line);
     return;
   }
   if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn) return;
@@ -341,7 +345,14 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
     for (const PixelPoint& m : o.mask_px)
       if (std::hypot(m.x_px - px, m.y_px - peak_y_abs) < o.mask_radius_px) masked = true;
     if (line_like || sparse || masked) {
-      result.push_back(Defect(px, peak_y_abs, line_like ? "line" : sparse ? "cross" : "masked"));
+      if (!line_like) {
+        result.push_back(Defect(px, peak_y_abs, sparse ? "cross" : "masked"));
+        return;
+      }
+      // A line at the centre of its box, its extent the box's diagonal (what a trail linker asks it may hide).
+      DetectedStar line = Defect(bx + 0.5 * (bw - 1), b.y0_abs + by + 0.5 * (bh - 1), "line");
+      line.length_px = std::hypot(bw, bh);
+      result.push_back(line);
       return;
     }
     // Fit window: the component grown by the PSF, and at least +-3 sigma around the peak.

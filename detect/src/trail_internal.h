@@ -1,9 +1,16 @@
 #pragma once
 // Internals of the trail linker shared by its source files (not installed).
 #include <Eigen/Dense>
+#include <cmath>
+#include <functional>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
+#include "platemeter/core/duty_cycle.h"
 #include "platemeter/core/pixel.h"
+#include "platemeter/detect/star_detector.h"
+#include "platemeter/detect/trail_linker.h"
 
 namespace platemeter::trail_internal {
 
@@ -33,5 +40,156 @@ class Track {
   Eigen::MatrixXd cov_x_, cov_y_;  // (A^T W A)^-1 per coordinate
   double reduced_chi2_ = 1.0;
 };
+
+inline double Dist(const PixelPoint& a, const PixelPoint& b) { return std::hypot(a.x_px - b.x_px, a.y_px - b.y_px); }
+
+// Spatial hash of points in cells of `cell` px.
+class Grid {
+ public:
+  Grid(const std::vector<PixelPoint>& p, const std::vector<int>& ids, double cell) : p_(p), cell_(cell) {
+    for (int i : ids) cells_[Key(p[i].x_px, p[i].y_px)].push_back(i);
+  }
+  // Calls f(j) for every point within r of (x, y).
+  template <class F>
+  void Near(double x, double y, double r, F f) const {
+    const long x0 = Cell(x - r), x1 = Cell(x + r), y0 = Cell(y - r), y1 = Cell(y + r);
+    for (long cy = y0; cy <= y1; ++cy)
+      for (long cx = x0; cx <= x1; ++cx) {
+        auto it = cells_.find(Pack(cx, cy));
+        if (it == cells_.end()) continue;
+        for (int j : it->second)
+          if (Dist(p_[j], {x, y}) <= r) f(j);
+      }
+  }
+
+ private:
+  long Cell(double v) const { return static_cast<long>(std::floor(v / cell_)); }
+  static long long Pack(long x, long y) { return (static_cast<long long>(x) << 32) ^ (y & 0xffffffffLL); }
+  long long Key(double x, double y) const { return Pack(Cell(x), Cell(y)); }
+  const std::vector<PixelPoint>& p_;
+  double cell_;
+  std::unordered_map<long long, std::vector<int>> cells_;
+};
+
+// Whether p lies inside the scanned area (image_min_px/image_max_px, when set) and the exposed format
+// (exposed_outline_px, when set) by at least margin_px.
+bool Inside(const TrailOptions& o, const PixelPoint& p, double margin_px);
+
+// What every step of the linker reads.
+struct Context {
+  const std::vector<DetectedStar>& images;
+  const TrailOptions& o;
+  std::vector<PixelPoint> p;
+  std::vector<bool> usable, elongated;
+  bool use_lengths = false;
+  std::vector<std::vector<ShutterExposure>> per_trail;  // exposures of each trail, time order
+  std::vector<int> lines;  // rejected lines with an extent (defects with length_px > 0), for ForReaching
+};
+
+inline bool IsLine(const DetectedStar& d) { return (d.flags & kStarDefect) && d.length_px > 0; }
+
+// Calls f(i) for every image within r of q, and for every rejected line that may reach that far (its centre
+// within r + half its extent): a dash merged into a line lies somewhere along it.
+template <class F>
+void ForReaching(const Context& c, const Grid& all, const PixelPoint& q, double r, F f) {
+  all.Near(q.x_px, q.y_px, r, [&](int i) {
+    if (!IsLine(c.images[i])) f(i);
+  });
+  for (int i : c.lines)
+    if (Dist(c.p[i], q) <= r + 0.5 * c.images[i].length_px) f(i);
+}
+
+// Whether a detection may hold (or be) a 20 s dash of a star whose dashes measure this flux and
+// length: anything but an image measured fainter than half the dash and shorter than half of it
+// (another star's dot; a dash merged with another image measures at least the dash's flux).
+inline bool CouldHoldDash(const DetectedStar& d, double dash_flux, double dash_length) {
+  return !(dash_flux > 0 && d.flux_dn > 0 && d.flux_dn < 0.5 * dash_flux && d.length_px < 0.5 * dash_length);
+}
+
+// Track degree the taken images support (span and count), capped by the option.
+int DegreeFor(int n, double span_s, int max_degree);
+
+// Whether image i may be exposure e (elongation and measured length against the duration).
+// With measured lengths (trail-mode detection) the length decides, within its own sigma; else the flag.
+// With the star's flux per second (flux_per_s > 0) the flux must match the duration too: in a crowded
+// field another star's image may sit where a faint dot was expected.
+// A segment at least two FWHM long must also lie along the track (velocity_px_per_s) within max_run_bend_deg.
+bool Compatible(const Context& c, int i, const ShutterExposure& e, const PixelPoint& velocity_px_per_s,
+                double flux_per_s = 0.0);
+
+// One growth of a trail along its predicted track (trail_grow.cpp).
+struct GrowSpec {
+  const std::vector<ShutterExposure>* exposures = nullptr;  // the exposure sequence, time order
+  std::vector<std::pair<int, int>> seed;  // (exposure index, image) already known, any order
+  int first = 0;                          // first exposure index tried
+  int step = 1;                           // +1: later exposures, -1: earlier ones
+  double flux_per_s = 0.0;                // the star's flux per second of exposure (0: not compared)
+  int max_missed_in_row = 5;
+  double window_s = 1e300;                // the track is fitted to the taken images within this of the prediction
+  // Extrapolated (a sibling trail across a break): an image is taken only within sibling_tolerance_px +
+  // sibling_tolerance_fraction x its distance from the nearest taken image.
+  bool extrapolated = false;
+  std::function<bool(int)> excluded;      // images that belong elsewhere (may be empty)
+};
+
+struct Growth {
+  std::vector<std::pair<int, int>> taken;  // (exposure index, image): the seed, then the new ones in order
+  int after_run = 0;                       // exposures taken past the seed
+  int missed = 0;                          // exposures between the seed and the last one taken, untaken
+  double rate_px_per_s = 0.0;
+};
+
+// Grows exposure by exposure from spec.first in direction spec.step: a smooth track fitted to the
+// images taken so far predicts the next exposure; the one compatible image within the tolerance is
+// taken, none or several leave it untaken; growth stops after max_missed_in_row untaken in a row.
+Growth Grow(const Context& c, const Grid& all, const GrowSpec& spec);
+
+// Grows trail s (0-based) from the images (exposure in trail t, image) of its neighbour t (s = t +- 1):
+// t's track carried across the break, every image within the sibling tolerance of the prediction.
+// `taken`: the images of trail s (exposure in trail s, image), exposure order.
+Growth GrowSibling(const Context& c, const Grid& all, const std::vector<std::pair<int, int>>& images, int t, int s,
+                   double flux_per_s, const std::function<bool(int)>& excluded, std::vector<std::pair<int, int>>* taken);
+
+// Sibling evidence (trail_siblings.cpp): under trail number u (0-based), a trail's track (its images
+// from t0_s to t1_s) carried to the exposures of trails u - 1 and u + 1 within the break +
+// sibling_window_s of its ends (their leading dashes excepted), inside the scan: the count of those
+// exposures holding a compatible image (length, flux) within the sibling tolerance, not the trail's own.
+struct SiblingEvidence {
+  int hits = 0;
+};
+SiblingEvidence SiblingsOf(const Context& c, const Grid& all, const Track& track, double t0_s, double t1_s, int u,
+                           double flux_per_s, const std::function<bool(int)>& own);
+
+// A trail grown from one separator dash (trail_pattern.cpp), its exposures those of trail
+// `reference` (the trail with the most leading dashes, so that growth can take all of them).
+struct PatternTrail {
+  std::vector<std::pair<int, int>> taken;  // (exposure index in c.per_trail[reference], image), time order
+  double flux_per_s = 0.0;
+};
+// Tries the dash (not a blend) as each separator (1..4) in each direction (only along `motion`, the local
+// direction of the stars' motion, when known): the neighbouring exposure's image, then growth both ways.
+// Exactly one hypothesis must reach 1 + min_exposures_after_run images, its other images' flux per second
+// the dash's; false otherwise.
+bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int reference, const PixelPoint* motion,
+                       const std::function<bool(int)>& excluded, PatternTrail* out);
+
+// Whether track a (images up to a1_s) and track b (images from b0_s, later) lie on one arc: each carried to
+// the other's end lands on it within join_tolerance_px + join_tolerance_fraction x the distance.
+bool OnOneArc(const TrailOptions& o, const Track& a, double a1_s, const Track& b, double b0_s);
+
+// The sibling a separator-grown trail grew under its number (NumberBySiblings).
+struct SiblingGrowth {
+  int sibling = -1;                        // 0-based trail number of the sibling
+  std::vector<std::pair<int, int>> images;  // (exposure in the sibling, image)
+  double rate_px_per_s = 0.0;              // the trail's speed
+};
+// The number (0-based) under which exactly one sibling grows from the trail's track: at least
+// min_exposures_after_run images, their own track fitted to the measuring precision (median residual
+// within max_median_residual_px) and on one arc with the trail's. -1 if none or several, or for a slow
+// star (10 s of motion, the offset of a wrong number, within twice the sibling tolerance across a break).
+// other_number(image, sibling): the image belongs to a decoded trail of another number than the sibling's.
+int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, int reference,
+                     const std::vector<int>& leading_dashes, const std::function<bool(int, int)>& other_number,
+                     SiblingGrowth* grown);
 
 }  // namespace platemeter::trail_internal

@@ -36,6 +36,7 @@ bool TrailOptions::Check(std::string* why) const {
   if (!(run_flux_tolerance > 0)) return fail("run_flux_tolerance must be > 0");
   if (min_sibling_images < 1 || !(sibling_window_s >= 0)) return fail("min_sibling_images must be >= 1");
   if (!(clean_radius_spacings >= 0)) return fail("clean_radius_spacings must be >= 0");
+  if (!(sibling_growth_window_s > 0)) return fail("sibling_growth_window_s must be > 0");
   if (!(sibling_tolerance_px > 0) || !(sibling_tolerance_fraction >= 0)) return fail("sibling_tolerance_px must be > 0");
   return true;
 }
@@ -50,46 +51,17 @@ std::string TrailLinkResult::Summary() const {
 
 namespace {
 
+using trail_internal::Compatible;
+using trail_internal::CouldHoldDash;
+using trail_internal::Context;
+using trail_internal::DegreeFor;
+using trail_internal::Dist;
+using trail_internal::Grid;
+using trail_internal::Grow;
+using trail_internal::Growth;
+using trail_internal::GrowSpec;
+using trail_internal::SiblingEvidence;
 using trail_internal::Track;
-
-// Spatial hash of points in cells of `cell` px.
-class Grid {
- public:
-  Grid(const std::vector<PixelPoint>& p, const std::vector<int>& ids, double cell) : p_(p), cell_(cell) {
-    for (int i : ids) cells_[Key(p[i].x_px, p[i].y_px)].push_back(i);
-  }
-  // Calls f(j) for every point within r of (x, y).
-  template <class F>
-  void Near(double x, double y, double r, F f) const {
-    const long x0 = Cell(x - r), x1 = Cell(x + r), y0 = Cell(y - r), y1 = Cell(y + r);
-    for (long cy = y0; cy <= y1; ++cy)
-      for (long cx = x0; cx <= x1; ++cx) {
-        auto it = cells_.find(Pack(cx, cy));
-        if (it == cells_.end()) continue;
-        for (int j : it->second)
-          if (std::hypot(p_[j].x_px - x, p_[j].y_px - y) <= r) f(j);
-      }
-  }
-
- private:
-  long Cell(double v) const { return static_cast<long>(std::floor(v / cell_)); }
-  static long long Pack(long x, long y) { return (static_cast<long long>(x) << 32) ^ (y & 0xffffffffLL); }
-  long long Key(double x, double y) const { return Pack(Cell(x), Cell(y)); }
-  const std::vector<PixelPoint>& p_;
-  double cell_;
-  std::unordered_map<long long, std::vector<int>> cells_;
-};
-
-double Dist(const PixelPoint& a, const PixelPoint& b) { return std::hypot(a.x_px - b.x_px, a.y_px - b.y_px); }
-
-struct Context {
-  const std::vector<DetectedStar>& images;
-  const TrailOptions& o;
-  std::vector<PixelPoint> p;
-  std::vector<bool> usable, elongated;
-  bool use_lengths = false;
-  std::vector<std::vector<ShutterExposure>> per_trail;  // exposures of each trail, time order
-};
 
 // With measured segments (trail-mode detection): a dash's run neighbours lie along its own direction
 // (angle_deg) at 1.5 of its length, with its length. Each side takes its one candidate; two or more
@@ -197,126 +169,6 @@ std::vector<std::vector<int>> FindRuns(const Context& c, const Grid& dashes, con
   return runs;
 }
 
-// Whether a detection may hold (or be) a 20 s dash of a star whose dashes measure this flux and
-// length: anything but an image measured fainter than half the dash and shorter than half of it
-// (another star's dot; a dash merged with another image measures at least the dash's flux).
-bool CouldHoldDash(const DetectedStar& d, double dash_flux, double dash_length) {
-  return !(dash_flux > 0 && d.flux_dn > 0 && d.flux_dn < 0.5 * dash_flux && d.length_px < 0.5 * dash_length);
-}
-
-// Track degree the taken images support (span and count), capped by the option.
-int DegreeFor(int n, double span_s, int max_degree) {
-  int d = 1;
-  if (n >= 6 && span_s > 150) d = 2;
-  if (n >= 12 && span_s > 500) d = 3;
-  return std::min(d, max_degree);
-}
-
-struct Growth {
-  std::vector<std::pair<int, int>> taken;  // (exposure index in the trail, image)
-  int after_run = 0;                       // exposures taken past the leading run
-  int missed = 0;
-  double rate_px_per_s = 0.0;
-};
-
-// Whether image i may be exposure e (elongation and measured length against the duration).
-// With measured lengths (trail-mode detection) the length decides, within its own sigma; else the flag.
-// With the star's flux per second (flux_per_s > 0, from its leading dashes) the flux must match the
-// duration too: in a crowded field another star's image may sit where a faint dot was expected.
-bool Compatible(const Context& c, int i, const ShutterExposure& e, double rate_px_per_s, double flux_per_s = 0.0) {
-  if (flux_per_s > 0) {
-    const double expect = flux_per_s * e.duration_s;
-    if (std::abs(c.images[i].flux_dn - expect) > c.o.flux_tolerance * expect + 4.0 * c.images[i].sigma_flux_dn)
-      return false;
-  }
-  if (c.use_lengths) {
-    const double expect = e.duration_s * rate_px_per_s;
-    const double tol = c.o.dash_length_tolerance * expect + c.o.psf_fwhm_px + 3.0 * c.images[i].sigma_length_px;
-    return std::abs(c.images[i].length_px - expect) <= tol;
-  }
-  return !(c.elongated[i] && e.duration_s < c.o.min_elongated_exposure_s);
-}
-
-// Grows trail t from its run (`run` in time order = exposures 0..N-1) exposure by exposure.
-Growth Grow(const Context& c, const Grid& all, int t, const std::vector<int>& run, double flux_per_s) {
-  const std::vector<ShutterExposure>& ex = c.per_trail[t];
-  Growth g;
-  std::vector<double> ts;
-  std::vector<PixelPoint> ps;
-  // Images taken so far (a trail takes at most ~35: a short list, not a flag per input image).
-  std::vector<int> used;
-  auto is_used = [&used](int i) { return std::find(used.begin(), used.end(), i) != used.end(); };
-  for (size_t k = 0; k < run.size(); ++k) {
-    g.taken.push_back({static_cast<int>(k), run[k]});
-    ts.push_back(ex[k].mid_s);
-    ps.push_back(c.p[run[k]]);
-    used.push_back(run[k]);
-  }
-  Track track;
-  int missed_in_row = 0;
-  for (size_t j = run.size(); j < ex.size(); ++j) {
-    if (!track.Fit(ts, ps, {}, {}, DegreeFor(static_cast<int>(ts.size()), ts.back() - ts.front(), c.o.track_degree)))
-      break;
-    const PixelPoint v = track.VelocityAt(ex[j].mid_s);
-    const double rate = std::hypot(v.x_px, v.y_px);
-    double spacing_s = ex[j].mid_s - ex[j - 1].mid_s;
-    if (j + 1 < ex.size()) spacing_s = std::min(spacing_s, ex[j + 1].mid_s - ex[j].mid_s);
-    const double tol = std::max(c.o.min_tolerance_px, c.o.match_tolerance * spacing_s * rate);
-    const PixelPoint q = track.At(ex[j].mid_s);
-    int found = -1, count = 0;
-    double nearest = 1e300, second = 1e300;
-    all.Near(q.x_px, q.y_px, tol, [&](int i) {
-      if (!c.usable[i] || is_used(i) || !Compatible(c, i, ex[j], rate, flux_per_s)) return;
-      const double d = Dist(c.p[i], q);
-      if (d < nearest) second = nearest, nearest = d, found = i;
-      else second = std::min(second, d);
-      ++count;
-    });
-    // Once the track is established its prediction is far better than `tol`: an image off it by more
-    // than the prediction allows, with other images around (a crowded field), may be another star's
-    // (this trail's own image missing or merged): not taken. Several candidates (a crossing trail):
-    // the nearest is taken when it lies within that limit and every other beyond three times it.
-    double limit = 1e300;
-    if (ts.size() >= 8) {
-      double ss = 0;
-      for (size_t k = 0; k < ts.size(); ++k) ss += std::pow(Dist(track.At(ts[k]), ps[k]), 2);
-      const double rms = std::sqrt(ss / ts.size());
-      double sx = 0, sy = 0;
-      track.SigmaAt(ex[j].mid_s, &sx, &sy);
-      const double chi = std::sqrt(track.reduced_chi2());
-      const double sigma_pred = std::hypot(sx, sy) * (chi < 1 ? chi : 1.0);
-      limit = std::max(c.o.tight_tolerance_px, 5.0 * std::hypot(sigma_pred, rms));
-      if (count > 1 && nearest <= limit && second > 3.0 * limit) count = 1;
-    }
-    if (count == 1 && nearest > c.o.tight_tolerance_px) {
-      if (nearest > limit) {
-        bool crowded = false;
-        all.Near(c.p[found].x_px, c.p[found].y_px, 2.5 * c.o.psf_fwhm_px,
-                 [&](int i) { crowded = crowded || (i != found && !is_used(i)); });
-        if (crowded) count = 0;
-      }
-    }
-    if (count != 1) {  // nothing (a missing image), or a stray beside it: the exposure stays untaken
-      ++g.missed;
-      if (++missed_in_row > c.o.max_missed_in_row) break;
-      continue;
-    }
-    missed_in_row = 0;
-    used.push_back(found);
-    g.taken.push_back({static_cast<int>(j), found});
-    ts.push_back(ex[j].mid_s);
-    ps.push_back(c.p[found]);
-    ++g.after_run;
-  }
-  // Exposures past the last one taken are not missing (the trail may leave the scan).
-  if (!g.taken.empty()) {
-    const int last = g.taken.back().first;
-    g.missed = last + 1 - static_cast<int>(g.taken.size());
-  }
-  if (track.Fit(ts, ps, {}, {}, 1)) g.rate_px_per_s = std::hypot(track.VelocityAt(ts.back()).x_px, track.VelocityAt(ts.back()).y_px);
-  return g;
-}
-
 // The final sidereal fit of one trail: weighted track, outliers flagged bad one at a time.
 bool FitTrail(const Context& c, const std::vector<std::pair<int, int>>& taken, TrailChain* chain,
               std::vector<TrailImage>* out, Track* final_track) {
@@ -408,7 +260,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   if (!options.Check(&why)) throw Error("trail options", why);
   const std::vector<ShutterExposure> schedule = BuildShutterSchedule(program);
   const int trails = static_cast<int>(program.leading_dashes.size());
-  Context c{images, options, {}, {}, {}, false, std::vector<std::vector<ShutterExposure>>(trails)};
+  Context c{images, options, {}, {}, {}, false, std::vector<std::vector<ShutterExposure>>(trails), {}};
   for (const ShutterExposure& e : schedule) c.per_trail[e.trail - 1].push_back(e);
 
   TrailLinkResult result;
@@ -423,6 +275,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     const DetectedStar& d = images[i];
     c.p[i] = d.point.position_px;
     if (d.point.status != PointStatus::kMeasured || (d.flags & kStarDefect)) {
+      if (trail_internal::IsLine(d)) c.lines.push_back(static_cast<int>(i));
       result.images[i].reason = "not_star";
       continue;
     }
@@ -435,7 +288,6 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   }
   const Grid all(c.p, all_ids, 32.0);
   const Grid dashes(c.p, dash_ids, options.max_dash_spacing_px);
-  const bool bounded = options.image_max_px.x_px > options.image_min_px.x_px;
 
   // 1-2. Runs, decoded by their length and grown in both directions.
   std::vector<std::vector<std::pair<int, int>>> taken_by;  // per decoded chain
@@ -490,7 +342,15 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       std::nth_element(f.begin(), f.begin() + f.size() / 2, f.end());
       flux_per_s = std::max(0.0, f[f.size() / 2] / c.per_trail[t].front().duration_s);
     }
-    for (int dir = 0; dir < 2; ++dir) grown[dir] = Grow(c, all, t, ordered[dir], flux_per_s);
+    for (int dir = 0; dir < 2; ++dir) {
+      GrowSpec spec;
+      spec.exposures = &c.per_trail[t];
+      for (size_t k = 0; k < run.size(); ++k) spec.seed.push_back({static_cast<int>(k), ordered[dir][k]});
+      spec.first = static_cast<int>(run.size());
+      spec.flux_per_s = flux_per_s;
+      spec.max_missed_in_row = options.max_missed_in_row;
+      grown[dir] = Grow(c, all, spec);
+    }
     const bool ok0 = grown[0].after_run >= options.min_exposures_after_run;
     const bool ok1 = grown[1].after_run >= options.min_exposures_after_run;
     if (ok0 == ok1) {
@@ -503,9 +363,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     const std::vector<int>& r = ordered[dir];
     const PixelPoint a = c.p[r[0]], b = c.p[r[1]];
     const PixelPoint before{2 * a.x_px - b.x_px, 2 * a.y_px - b.y_px};
-    const double e = options.edge_margin_px;
-    if (bounded && (before.x_px < options.image_min_px.x_px + e || before.y_px < options.image_min_px.y_px + e ||
-                    before.x_px > options.image_max_px.x_px - e || before.y_px > options.image_max_px.y_px - e)) {
+    if (!trail_internal::Inside(options, before, options.edge_margin_px)) {
       refuse("at_edge");
       continue;
     }
@@ -514,7 +372,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     bool occupied = false;
     double dash_flux = 0, dash_length = 0;
     for (int i : run) dash_flux += images[i].flux_dn / run.size(), dash_length += images[i].length_px / run.size();
-    all.Near(before.x_px, before.y_px, std::max(options.min_tolerance_px, 0.5 * Dist(a, b)), [&](int i) {
+    trail_internal::ForReaching(c, all, before, std::max(options.min_tolerance_px, 0.5 * Dist(a, b)), [&](int i) {
       if (CouldHoldDash(images[i], dash_flux, dash_length)) occupied = true;
     });
     // Occupied: the number needs its siblings' confirmation (step 4); no clean-field exception.
@@ -560,13 +418,14 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     tc.reason = reason;
     tc.bad_images = 0;
   };
-  for (size_t g = 0; g < taken_by.size(); ++g) {
-    const int cid = chain_of_taken[g];
+  // 3. The sidereal fit and the crowded-field checks of one trail (images: (exposure, image)); false:
+  // the trail is refused and its tags taken back.
+  auto settle = [&](int cid, const std::vector<std::pair<int, int>>& taken) -> bool {
     TrailChain& tc = result.chains[cid];
     const std::vector<ShutterExposure>& ex = c.per_trail[tc.trail - 1];
     std::vector<std::pair<int, int>> kept;
     tc.images.clear();
-    for (const auto& [j, i] : taken_by[g]) {
+    for (const auto& [j, i] : taken) {
       TrailImage& ti = result.images[i];
       if (owner_count[i] > 1) {
         ti.reason = "contested";
@@ -589,7 +448,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     if (static_cast<int>(kept.size()) < tc.leading_dashes + options.min_exposures_after_run / 2 ||
         !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
       refuse(tc, kept, "contested");
-      continue;
+      return false;
     }
     // Another star's images taken along the way (a crowded field) leave the track off most of them;
     // a trail's own images sit on it to their measuring precision.
@@ -603,7 +462,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       if (!res.empty()) median_residual = res[res.size() / 2];
       if (res.empty() || res[res.size() / 2] > limit) {
         refuse(tc, kept, "poor_track");
-        continue;
+        return false;
       }
     }
     // A bad image, or one off the track by more than tight_tolerance_px, with other images around it
@@ -666,10 +525,12 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         }
       }
     }
-    if (refused) continue;
+    if (refused) return false;
     kept_of[cid] = kept;
     result.bad_images += tc.bad_images;
-  }
+    return true;
+  };
+  for (size_t g = 0; g < taken_by.size(); ++g) settle(chain_of_taken[g], taken_by[g]);
 
   // 4. Stars: trail A's track carried to B's images and back. Both must land on the other's
   // fitted track within the tolerance; a trail joins at most one trail of each other number.
@@ -680,9 +541,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   };
   // Whether track a (images up to a1 s) and track b (images from b0 s, later) lie on one arc.
   auto on_one_arc = [&](const Track& ta, double a1, const Track& tb, double b0) {
-    const PixelPoint pa = ta.At(b0), pb = tb.At(b0), qa = ta.At(a1), qb = tb.At(a1);
-    const double tol = options.join_tolerance_px + options.join_tolerance_fraction * Dist(pa, qa);
-    return Dist(pa, pb) <= tol && Dist(qa, qb) <= tol;
+    return trail_internal::OnOneArc(options, ta, a1, tb, b0);
   };
   auto decoded = [&](int k) { return result.chains[k].trail > 0 && !kept_of[k].empty(); };
   // Every decoded trail's track under every trail number (its images re-timed: exposure j of a
@@ -764,30 +623,24 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   auto sibling_score = [&](int k, int u) {
     const Retimed& r = retimed[k][u];
     if (!r.ok) return 0;
-    int score = 0;
-    for (int s : {u - 1, u + 1}) {
-      if (s < 0 || s >= trails) continue;
-      const double te = s < u ? r.t0 : r.t1;
-      const double gap_s = s < u ? c.per_trail[u].front().mid_s - c.per_trail[s].back().mid_s
-                                 : c.per_trail[s].front().mid_s - c.per_trail[u].back().mid_s;
-      const PixelPoint end = r.track.At(te);
-      for (const ShutterExposure& e : c.per_trail[s]) {
-        if (std::abs(e.mid_s - te) > gap_s + options.sibling_window_s) continue;
-        const PixelPoint q = r.track.At(e.mid_s);
-        if (bounded && (q.x_px < options.image_min_px.x_px || q.y_px < options.image_min_px.y_px ||
-                        q.x_px > options.image_max_px.x_px || q.y_px > options.image_max_px.y_px))
-          continue;
-        const double tol = options.sibling_tolerance_px + options.sibling_tolerance_fraction * Dist(q, end);
-        const PixelPoint v = r.track.VelocityAt(e.mid_s);
-        const double rate = std::hypot(v.x_px, v.y_px);
-        bool hit = false;
-        all.Near(q.x_px, q.y_px, tol, [&](int i) {
-          if (c.usable[i] && result.images[i].chain != k && Compatible(c, i, e, rate, flux_of.at(k))) hit = true;
-        });
-        score += hit;
-      }
-    }
-    return score;
+    return trail_internal::SiblingsOf(c, all, r.track, r.t0, r.t1, u, flux_of.at(k),
+                                      [&](int i) { return result.images[i].chain == k; }).hits;
+  };
+  // The trails with the most leading dashes: its exposures can hold every other trail's (re-timed).
+  const int reference = static_cast<int>(
+      std::max_element(program.leading_dashes.begin(), program.leading_dashes.end()) - program.leading_dashes.begin());
+  // A decoded sibling's images are no other number's (they join).
+  const auto other_number = [&](int i, int sibling) {
+    const int ch = result.images[i].chain;
+    return ch >= 0 && result.chains[ch].trail != sibling + 1;
+  };
+  auto number_by_siblings = [&](int k) {
+    trail_internal::PatternTrail pt;
+    const int shift = program.leading_dashes[reference] - result.chains[k].leading_dashes;
+    for (const auto& [j, i] : kept_of[k]) pt.taken.push_back({j + shift, i});
+    pt.flux_per_s = flux_of.at(k);
+    trail_internal::SiblingGrowth grown;
+    return trail_internal::NumberBySiblings(c, all, pt, reference, program.leading_dashes, other_number, &grown);
   };
   for (int k : decoded_ids) {
     if (doubtful[k]) continue;
@@ -800,17 +653,31 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       doubtful[k] = true;  // its siblings say another number
       continue;
     }
-    if (joined[k] || (own >= options.min_sibling_images && 3 * alt <= own)) continue;
+    if (joined[k]) continue;
+    // Confirmed by a sibling grown from its track (on one arc, well fitted) under its number and no other;
+    // single images on sibling exposures (`own`) do not confirm: in a crowded field other stars' images lie
+    // within the tolerance of a few of them.
+    if (own >= options.min_sibling_images) {
+      const int number = number_by_siblings(k);
+      if (number == t) continue;
+      if (number >= 0) {
+        doubtful[k] = true;
+        continue;
+      }
+    }
     // Unconfirmed: kept only where nothing could have hidden a leading dash (or posed as one).
     const auto& [before, spacing] = before_of.at(k);
     const auto& [dash_flux, dash_length] = dash_of.at(k);
     bool clean = true;
-    all.Near(before.x_px, before.y_px, options.clean_radius_spacings * spacing, [&](int i) {
+    trail_internal::ForReaching(c, all, before, options.clean_radius_spacings * spacing, [&](int i) {
       if (result.images[i].chain != k && CouldHoldDash(images[i], dash_flux, dash_length)) clean = false;
     });
-    if (!clean || before_occupied[k])
+    // A slow star's 10 s gaps (a third of the spacing) within the PSF: its dashes merge, a lost one leaves
+    // no trace in front of the run.
+    const bool unresolved = spacing / 3.0 < options.psf_fwhm_px;
+    if (!clean || before_occupied[k] || unresolved)
       doubtful[k] = true, joined[k] = false,
-      result.chains[k].reason = before_occupied[k] ? "image_before_run" : "unconfirmed";
+      result.chains[k].reason = before_occupied[k] ? "image_before_run" : unresolved ? "unresolved_run" : "unconfirmed";
   }
   if (options.require_joined)
     for (int k : decoded_ids)
@@ -837,9 +704,148 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     if (decoded(a) && decoded(b) && partner_count[a][tb] == 1 && partner_count[b][ta] == 1)
       parent[Root(parent, a)] = Root(parent, b);
   }
+  // 5. Siblings grown from the decoded trails: a trail whose own run was not found (its leading dashes
+  // merged with crossing images, its first dots lost) is grown from its decoded neighbour's track,
+  // carried across the break: its number is the neighbour's +-1, its exposures' times are known, and
+  // every image must lie within the sibling tolerance of the prediction. The grown trail passes the
+  // same fit and checks and must join its neighbour; it then seeds the next sibling.
+  std::vector<int> numbers(m, 0);  // per star root: bit u set when the star holds trail u + 1
+  for (int k = 0; k < m; ++k)
+    if (decoded(k)) numbers[Root(parent, k)] |= 1 << (result.chains[k].trail - 1);
+  // A new chain (trail number s, its images (exposure, image)) as a star of its own; false when refused.
+  auto add_chain = [&](int s, const std::vector<std::pair<int, int>>& taken, double flux_per_s, double rate_px_per_s,
+                       int missed) {
+    const int cid = static_cast<int>(result.chains.size());
+    TrailChain tc;
+    tc.trail = s + 1;
+    tc.leading_dashes = program.leading_dashes[s];
+    tc.rate_px_per_s = rate_px_per_s;
+    tc.missed_exposures = missed;
+    for (const auto& [j, i] : taken) owner_count[i] = 1;
+    result.chains.push_back(tc);
+    tracks.emplace_back();
+    kept_of.emplace_back();
+    parent.push_back(cid);
+    numbers.push_back(1 << s);
+    flux_of[cid] = flux_per_s;
+    return settle(cid, taken);
+  };
+  auto GrowSiblings = [&] {
+    std::vector<int> frontier;
+    for (int k = 0; k < static_cast<int>(result.chains.size()); ++k)
+      if (decoded(k)) frontier.push_back(k);
+    while (!frontier.empty()) {
+      std::vector<int> next;
+      for (int k : frontier) {
+        const int t = result.chains[k].trail - 1;
+        for (int s : {t - 1, t + 1}) {
+          if (!decoded(k) || s < 0 || s >= trails || (numbers[Root(parent, k)] >> s & 1)) continue;
+          std::vector<std::pair<int, int>> taken;  // exposures of trail s
+          const Growth g = trail_internal::GrowSibling(c, all, kept_of[k], t, s, flux_of.at(k),
+                                                       [&](int i) { return result.images[i].chain >= 0; }, &taken);
+          if (g.after_run < options.min_exposures_after_run) continue;
+          const int cid = static_cast<int>(result.chains.size());
+          if (!add_chain(s, taken, flux_of.at(k), g.rate_px_per_s, g.missed)) continue;
+          // It must join k: each track carried to the other's end lands on it.
+          double k0 = 0, k1 = 0, n0 = 0, n1 = 0;
+          ends(k, &k0, &k1);
+          ends(cid, &n0, &n1);
+          const bool joins_k = s < t ? on_one_arc(tracks[cid], n1, tracks[k], k0) : on_one_arc(tracks[k], k1, tracks[cid], n0);
+          if (!joins_k) {
+            result.bad_images -= result.chains[cid].bad_images;
+            refuse(result.chains[cid], kept_of[cid], "unjoined");
+            kept_of[cid].clear();
+            continue;
+          }
+          const int root = Root(parent, k);
+          parent[cid] = root;
+          numbers[root] |= 1 << s;
+          next.push_back(cid);
+        }
+      }
+      frontier = next;
+    }
+  };
+  // 6. Trails from their separator dashes (no run found, no decoded sibling): grown from each unassigned
+  // dash read as each separator (trail_pattern.cpp), then numbered by their siblings' raw images: the
+  // track under trail number u carried across the breaks must find images at the exposures of trails
+  // u - 1 and u + 1 (at least min_sibling_images, 3x more than under any other number), or (a trail
+  // whose siblings lie off the scan) every other number must find its siblings' long exposures empty.
+  // A slow star (10 s of motion, the offset of a wrong number, within twice the tolerance) is not numbered.
+  auto PatternTrails = [&] {
+    std::vector<int> seeds;
+    for (int i : dash_ids)
+      if (result.images[i].chain < 0) seeds.push_back(i);
+    std::sort(seeds.begin(), seeds.end(), [&](int x, int y) { return images[x].flux_dn > images[y].flux_dn; });
+    const auto excluded = [&](int i) { return result.images[i].chain >= 0; };
+    // The local direction of motion: the decoded trails' velocities near a point, when at least two agree
+    // (within ~25 deg of their mean).
+    std::vector<PixelPoint> mid_of(result.chains.size()), heading(result.chains.size());
+    std::vector<int> moving;
+    for (int k = 0; k < static_cast<int>(result.chains.size()); ++k) {
+      if (!decoded(k)) continue;
+      double t0 = 0, t1 = 0;
+      ends(k, &t0, &t1);
+      const PixelPoint v = tracks[k].VelocityAt(0.5 * (t0 + t1));
+      const double speed = std::hypot(v.x_px, v.y_px);
+      if (speed <= 0) continue;
+      mid_of[k] = tracks[k].At(0.5 * (t0 + t1));
+      heading[k] = {v.x_px / speed, v.y_px / speed};
+      moving.push_back(k);
+    }
+    const Grid mids(mid_of, moving, options.motion_radius_px);
+    auto motion_at = [&](const PixelPoint& p, PixelPoint* unit) {
+      double sx = 0, sy = 0;
+      int n = 0;
+      mids.Near(p.x_px, p.y_px, options.motion_radius_px, [&](int k) { sx += heading[k].x_px, sy += heading[k].y_px, ++n; });
+      const double len = std::hypot(sx, sy);
+      if (n < 2 || len < 0.9 * n) return false;
+      *unit = {sx / len, sy / len};
+      return true;
+    };
+    for (int dash : seeds) {
+      if (result.images[dash].chain >= 0) continue;
+      trail_internal::PatternTrail pt;
+      PixelPoint unit;
+      const bool known = motion_at(c.p[dash], &unit);
+      if (options.require_motion && !known) continue;
+      if (!trail_internal::GrowFromSeparator(c, all, dash, reference, known ? &unit : nullptr, excluded, &pt)) continue;
+      trail_internal::SiblingGrowth grown;
+      const int best = trail_internal::NumberBySiblings(c, all, pt, reference, program.leading_dashes, other_number, &grown);
+      if (best < 0) continue;
+      const int shift = program.leading_dashes[best] - program.leading_dashes[reference];
+      std::vector<std::pair<int, int>> taken;
+      for (const auto& [j, i] : pt.taken)
+        if (j + shift >= 0) taken.push_back({j + shift, i});
+      const int cid = static_cast<int>(result.chains.size());
+      if (!add_chain(best, taken, pt.flux_per_s, grown.rate_px_per_s, 0)) continue;
+      // Its sibling's images taken by a decoded trail of that number: the two join when they lie on one arc.
+      const int sib = grown.sibling;
+      const std::vector<std::pair<int, int>>& sibling_images = grown.images;
+      std::unordered_map<int, int> votes;
+      for (const auto& [j, i] : sibling_images)
+        if (result.images[i].chain >= 0) ++votes[result.images[i].chain];
+      for (const auto& [k, n] : votes) {
+        if (2 * n < static_cast<int>(sibling_images.size()) || !decoded(k) || (numbers[Root(parent, k)] >> best & 1)) continue;
+        double k0 = 0, k1 = 0, n0 = 0, n1 = 0;
+        ends(k, &k0, &k1);
+        ends(cid, &n0, &n1);
+        if (sib < best ? on_one_arc(tracks[k], k1, tracks[cid], n0) : on_one_arc(tracks[cid], n1, tracks[k], k0)) {
+          const int root = Root(parent, k);
+          numbers[root] |= numbers[Root(parent, cid)];
+          parent[Root(parent, cid)] = root;
+        }
+      }
+    }
+  };
+  if (options.grow_siblings) GrowSiblings();
+  if (options.pattern_trails) {
+    PatternTrails();
+    if (options.grow_siblings) GrowSiblings();
+  }
   // A star may hold each trail number once; otherwise its trails stay stars of their own.
   std::unordered_map<int, std::vector<int>> members;
-  for (int k = 0; k < m; ++k)
+  for (int k = 0; k < static_cast<int>(result.chains.size()); ++k)
     if (decoded(k)) members[Root(parent, k)].push_back(k);
   std::vector<std::vector<int>> groups;
   for (auto& [root, ks] : members) {

@@ -434,6 +434,12 @@ TEST(StarDetectorTest, TrailModeMeasuresDashesAndKeepsLinesDefects) {
   }
   EXPECT_EQ(measured, 0) << "a line, blob or wide streak measured as a star";
   EXPECT_GE(defects, 3);
+  // The scratch is reported at its centre with its extent (what a merged dash could hide in).
+  const DetectedStar* line = nearest(200.0, 200.0, 3.0);
+  ASSERT_TRUE(line) << "the line is not reported at its centre";
+  EXPECT_EQ(line->point.reason, "line");
+  EXPECT_GT(line->length_px, 0.9 * 72.0);
+  EXPECT_LT(line->length_px, 1.4 * 72.0);
   // The same image without trail mode: the dashes are not stars either.
   StarDetectorOptions plain = o;
   plain.max_dash_length_px = 0.0;

@@ -12,10 +12,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <map>
 #include <numbers>
 #include <numeric>
 #include <set>
+#include <string>
 #include <unordered_map>
 
 #include "platemeter/calib/star_catalog.h"
@@ -27,7 +30,9 @@
 namespace platemeter {
 namespace {
 
-constexpr const char* kCrowdedSpec = R"(
+// A whole Orbigon plate with the catalog stars to magnitude_limit (V = 7: thousands of crossing trails).
+std::string FieldSpec(double magnitude_limit) {
+  return R"(
 name = "crowded-trails"
 camera = "orbigon"
 seed = 5
@@ -42,8 +47,8 @@ latitude_deg = 39.03
 longitude_deg = -76.93
 height_m = 50
 start_utc = "1972-05-12T05:30:00Z"
-magnitude_limit = 7.0
-)";
+magnitude_limit = )" + std::to_string(magnitude_limit) + "\n";
+}
 
 double SecondsAfter0530(const std::string& iso) {
   int h = 0, mi = 0;
@@ -69,16 +74,25 @@ int Root(std::vector<int>& parent, int i) {
   return i;
 }
 
-TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
-  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
-    GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
-  const sim::SimulatedPlate plate =
-      sim::BuildSimulatedPlate(sim::ParseSimulationSpec(kCrowdedSpec, "crowded.toml"), DefinitionRegistry());
-  const double fwhm_px = 30.0 / 12.5;
+// The detections a detector would make of a simulated plate's true trail images (those `keep` accepts).
+struct Field {
+  sim::SimulatedPlate plate;
   std::vector<TrueImage> all;
+  std::vector<DetectedStar> found;
+  std::vector<std::vector<int>> members;  // true images of each detection
+  std::map<std::string, int> images_per_trail, dominant_per_trail;
+  TrailOptions options;
+};
+
+std::unique_ptr<Field> BuildField(const std::string& spec, const std::function<bool(const MeasuredPoint&)>& keep) {
+  auto field = std::make_unique<Field>();
+  field->plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(spec, "crowded.toml"), DefinitionRegistry());
+  const sim::SimulatedPlate& plate = field->plate;
+  const double fwhm_px = 30.0 / 12.5;
+  std::vector<TrueImage>& all = field->all;
   for (size_t i = 0; i < plate.truth.size(); ++i) {
     const MeasuredPoint& t = plate.truth[i];
-    if ((t.kind != PointKind::kTrailDot && t.kind != PointKind::kTrailDash) || plate.truth_mark[i] < 0) continue;
+    if ((t.kind != PointKind::kTrailDot && t.kind != PointKind::kTrailDash) || plate.truth_mark[i] < 0 || !keep(t)) continue;
     const sim::SceneMark& m = plate.scene.marks[static_cast<size_t>(plate.truth_mark[i])];
     const double sx = m.px_from_um[0] * m.segment_u_um + m.px_from_um[1] * m.segment_v_um;
     const double sy = m.px_from_um[2] * m.segment_u_um + m.px_from_um[3] * m.segment_v_um;
@@ -88,7 +102,6 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
     im.angle_deg = std::atan(sy / (sx != 0 ? sx : 1e-12)) * 180.0 / std::numbers::pi;
     all.push_back(im);
   }
-  ASSERT_GT(all.size(), 50000u) << "not a crowded field";
   // Faint images (the 0.6-1.2 s dots of the fainter stars) are not detected: the faintest quarter.
   std::vector<double> fluxes;
   for (const TrueImage& im : all) fluxes.push_back(im.flux);
@@ -118,9 +131,6 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   }
   std::map<int, std::vector<int>> groups;
   for (int i = 0; i < n; ++i) groups[Root(parent, i)].push_back(i);
-  std::vector<DetectedStar> found;
-  std::vector<std::vector<int>> members;
-  long merged = 0;
   for (const auto& [root, g] : groups) {
     double f = 0, x = 0, y = 0;
     int dominant = g[0];
@@ -129,11 +139,10 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
       if (all[i].flux > all[dominant].flux) dominant = i;
     }
     if (f < min_flux) continue;
-    merged += g.size() > 1;
     DetectedStar d;
     d.point.kind = PointKind::kStar;
     d.point.status = PointStatus::kMeasured;
-    const int k = static_cast<int>(found.size());
+    const int k = static_cast<int>(field->found.size());
     d.point.position_px = {x / f + 0.03 * std::sin(1.7 * k), y / f + 0.03 * std::cos(2.3 * k)};
     d.point.sigma_x_px = d.point.sigma_y_px = 0.03;
     d.flux_dn = f;
@@ -142,19 +151,17 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
     d.sigma_length_px = 0.1;
     d.angle_deg = all[dominant].angle_deg;
     if (d.length_px > fwhm_px) d.flags = kStarElongated;
-    found.push_back(d);
-    members.push_back(g);
+    field->found.push_back(d);
+    field->members.push_back(g);
   }
   // Whole trails (every image of the trail a detection's dominant image): the coverage's denominator.
-  std::map<std::string, int> images_per_trail, dominant_per_trail;
-  for (const TrueImage& im : all) images_per_trail[im.truth->star_id + im.truth->trail]++;
-  for (const std::vector<int>& g : members) {
+  for (const TrueImage& im : all) field->images_per_trail[im.truth->star_id + im.truth->trail]++;
+  for (const std::vector<int>& g : field->members) {
     int dominant = g[0];
     for (int i : g) dominant = all[i].flux > all[dominant].flux ? i : dominant;
-    dominant_per_trail[all[dominant].truth->star_id + all[dominant].truth->trail]++;
+    field->dominant_per_trail[all[dominant].truth->star_id + all[dominant].truth->trail]++;
   }
-
-  TrailOptions to;
+  TrailOptions& to = field->options;
   to.psf_fwhm_px = fwhm_px;
   to.max_dash_spacing_px = 40.0;  // 30 s at the fastest rate (~0.94 px/s at 12.5 um)
   // The exposed format (114 mm square: the simulator drops images outside it), in pixels.
@@ -166,52 +173,65 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
     }
   to.image_min_px = {x0, y0};
   to.image_max_px = {x1, y1};
-  auto run = [&](const TrailOptions& options, long* right, long* clean_dots, bool report) {
-    const TrailLinkResult r = LinkTrails(found, DutyCycleScheduleOptions{}, options);
-    long wrong = 0;
-    *right = 0;
-    *clean_dots = 0;
-    std::map<int, std::set<std::string>> star_truths;
-    for (size_t k = 0; k < found.size(); ++k) {
-      const TrailImage& ti = r.images[k];
-      const std::vector<int>& g = members[k];
-      if (g.size() == 1 && all[g[0]].truth->kind == PointKind::kTrailDot &&
-          dominant_per_trail[all[g[0]].truth->star_id + all[g[0]].truth->trail] ==
-              images_per_trail[all[g[0]].truth->star_id + all[g[0]].truth->trail])
-        ++*clean_dots;
-      if (!ti.assigned) continue;
-      // Right: tagged as the detection's dominant image (a close double star's images coincide all along
-      // its trails: the tags hold for both).
-      int dominant = g[0];
-      for (int i : g) dominant = all[i].flux > all[dominant].flux ? i : dominant;
-      const MeasuredPoint& t = *all[dominant].truth;
-      const bool dot = ti.kind == ExposureKind::kDot;
-      const bool ok = (t.kind == PointKind::kTrailDot) == dot && t.trail == "T" + std::to_string(ti.trail) &&
-                      *t.dot == (dot ? ti.dot_index : ti.dash_index) &&
-                      std::abs(SecondsAfter0530(t.mid_time_utc) - ti.mid_s) < 0.0015;
-      if (ok) star_truths[ti.star].insert(t.star_id);
-      wrong += !ok;
-      *right += ok && g.size() == 1 && ti.kind == ExposureKind::kDot &&
-                dominant_per_trail[all[g[0]].truth->star_id + all[g[0]].truth->trail] ==
-                    images_per_trail[all[g[0]].truth->star_id + all[g[0]].truth->trail];
-      if (!ok && report && wrong <= 5)
-        ADD_FAILURE() << "tagged T" << ti.trail << " " << ti.dot_index << "/" << ti.dash_index << " is "
-                      << all[g[0]].truth->id << " (+" << g.size() - 1 << " merged)";
-    }
-    long mixing = 0;  // linker stars holding images of several truth stars (close doubles, see above)
-    for (const auto& [s, ids] : star_truths) mixing += ids.size() > 1;
-    if (report)
-      std::printf("[crowded] %zu true images, %zu detections (%ld merged), %ld unmerged dots of whole trails, %ld "
-                  "tagged right, %ld wrong, %ld linker stars mixing truth stars; %s\n",
-                  all.size(), found.size(), merged, *clean_dots, *right, wrong, mixing, r.Summary().c_str());
-    return wrong;
-  };
-  long right = 0, clean_dots = 0;
-  EXPECT_EQ(run(to, &right, &clean_dots, true), 0);
-  EXPECT_GT(clean_dots, 2000);
-  EXPECT_GE(right, clean_dots / 3);  // figures in docs/trails.md
+  return field;
+}
+
+struct Score {
+  long right = 0;       // unmerged dots of whole trails tagged right
+  long clean_dots = 0;  // unmerged dots of whole trails
+  long wrong = 0;       // detections tagged other than their dominant image
+  long mixing = 0;      // linker stars holding images of several truth stars
+};
+
+// A merged detection is right only when tagged as its dominant image (a close double star's images
+// coincide all along its trails: the tags hold for both).
+Score ScoreField(const Field& field, const TrailLinkResult& r, bool report) {
+  Score score;
+  std::map<int, std::set<std::string>> star_truths;
+  for (size_t k = 0; k < field.found.size(); ++k) {
+    const TrailImage& ti = r.images[k];
+    const std::vector<int>& g = field.members[k];
+    const MeasuredPoint& first = *field.all[g[0]].truth;
+    const auto dominant_it = field.dominant_per_trail.find(first.star_id + first.trail);
+    const bool whole = dominant_it != field.dominant_per_trail.end() &&
+                       dominant_it->second == field.images_per_trail.at(first.star_id + first.trail);
+    const bool clean_dot = g.size() == 1 && first.kind == PointKind::kTrailDot && whole;
+    score.clean_dots += clean_dot;
+    if (!ti.assigned) continue;
+    int dominant = g[0];
+    for (int i : g) dominant = field.all[i].flux > field.all[dominant].flux ? i : dominant;
+    const MeasuredPoint& t = *field.all[dominant].truth;
+    const bool dot = ti.kind == ExposureKind::kDot;
+    const bool ok = (t.kind == PointKind::kTrailDot) == dot && t.trail == "T" + std::to_string(ti.trail) &&
+                    *t.dot == (dot ? ti.dot_index : ti.dash_index) &&
+                    std::abs(SecondsAfter0530(t.mid_time_utc) - ti.mid_s) < 0.0015;
+    if (ok) star_truths[ti.star].insert(t.star_id);
+    score.wrong += !ok;
+    score.right += ok && clean_dot && dot;
+    if (!ok && report && score.wrong <= 5)
+      ADD_FAILURE() << "tagged T" << ti.trail << " " << ti.dot_index << "/" << ti.dash_index << " is " << first.id
+                    << " (+" << g.size() - 1 << " merged)";
+  }
+  for (const auto& [s, ids] : star_truths) score.mixing += ids.size() > 1;
+  return score;
+}
+
+TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
+  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
+    GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
+  const auto field = BuildField(FieldSpec(7.0), [](const MeasuredPoint&) { return true; });
+  ASSERT_GT(field->all.size(), 50000u) << "not a crowded field";
+  const TrailLinkResult r = LinkTrails(field->found, DutyCycleScheduleOptions{}, field->options);
+  const Score score = ScoreField(*field, r, true);
+  std::printf("[crowded] %zu true images, %zu detections, %ld unmerged dots of whole trails, %ld tagged right, %ld "
+              "wrong, %ld linker stars mixing truth stars; %s\n",
+              field->all.size(), field->found.size(), score.clean_dots, score.right, score.wrong, score.mixing,
+              r.Summary().c_str());
+  EXPECT_EQ(score.wrong, 0);
+  EXPECT_GT(score.clean_dots, 2000);
+  EXPECT_GE(score.right, score.clean_dots * 8 / 10);  // figures in docs/trails.md
   // Without the crowded-field checks the same field is tagged wrongly: the test can fail.
-  TrailOptions loose = to;
+  TrailOptions loose = field->options;
   loose.flux_tolerance = 0;
   loose.run_flux_tolerance = 1e9;
   loose.tight_tolerance_px = 1e9;
@@ -219,10 +239,48 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   loose.max_leverage = 1.0;
   loose.max_median_residual_px = 1e9;
   loose.clean_radius_spacings = 0;
-  long loose_right = 0, loose_clean = 0;
-  const long loose_wrong = run(loose, &loose_right, &loose_clean, false);
-  std::printf("[crowded, checks off] %ld tagged right, %ld wrong\n", loose_right, loose_wrong);
-  EXPECT_GT(loose_wrong, 0);
+  const Score loose_score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, loose), false);
+  std::printf("[crowded, checks off] %ld tagged right, %ld wrong\n", loose_score.right, loose_score.wrong);
+  EXPECT_GT(loose_score.wrong, 0);
+  // Without the sibling growth and the separator seeds (docs/trails.md, "Hidden runs") fewer are found.
+  TrailOptions runs_only = field->options;
+  runs_only.grow_siblings = runs_only.pattern_trails = false;
+  const Score runs_score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, runs_only), false);
+  std::printf("[crowded, leading runs only] %ld tagged right, %ld wrong\n", runs_score.right, runs_score.wrong);
+  EXPECT_EQ(runs_score.wrong, 0);
+  EXPECT_LT(runs_score.right, score.right * 9 / 10);
+}
+
+// Trails whose leading runs are wholly lost (merged into crossing images, or under dust) are still
+// decoded: a sibling decoded from its own run grows them across the break (their number is its
+// number +- 1), and a trail with no decoded sibling is grown from a separator dash and numbered by the
+// sibling it can grow under exactly one number. Here every run of trails T2 and T3 is removed (only
+// the siblings can number them), then every leading dash of every trail (only the separators remain).
+TEST(TrailCrowded, TrailsWithoutTheirLeadingRunAreDecodedFromTheirSiblings) {
+  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
+    GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
+  auto leading = [](const MeasuredPoint& t) {
+    const int n = std::stoi(t.trail.substr(1)) + 1;  // T1..T4: 2..5 leading dashes (Table 1 defaults)
+    return t.kind == PointKind::kTrailDash && *t.dot <= n;
+  };
+  for (const bool all_trails : {false, true}) {
+    const auto field = BuildField(FieldSpec(5.0), [&](const MeasuredPoint& t) {
+      return !(leading(t) && (all_trails || t.trail == "T2" || t.trail == "T3"));
+    });
+    const TrailLinkResult r = LinkTrails(field->found, DutyCycleScheduleOptions{}, field->options);
+    const Score score = ScoreField(*field, r, true);
+    TrailOptions runs_only = field->options;
+    runs_only.grow_siblings = runs_only.pattern_trails = false;
+    const Score before = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, runs_only), false);
+    std::printf("[no runs: %s] %ld unmerged dots of whole trails, %ld tagged right (leading runs only: %ld), %ld wrong; %s\n",
+                all_trails ? "every trail" : "T2, T3", score.clean_dots, score.right, before.right, score.wrong,
+                r.Summary().c_str());
+    EXPECT_EQ(score.wrong, 0);
+    EXPECT_GT(score.clean_dots, 1000);
+    // Figures in docs/trails.md.
+    EXPECT_GE(score.right, score.clean_dots * (all_trails ? 5 : 8) / 10);
+    EXPECT_LE(before.right, score.clean_dots * (all_trails ? 0 : 6) / 10);
+  }
 }
 
 }  // namespace

@@ -31,6 +31,17 @@
 //      without trace makes trail N+1 look like trail N) are refused
 //      ("doubtful_number"). A lone trail (no other trail of its star decoded)
 //      cannot be checked so: require_joined refuses those too.
+//   5. grows, from every trail so decoded, its neighbours (trails t - 1, t + 1)
+//      whose own runs were not found: the track carried across the break (a
+//      parabola beyond the images) predicts the neighbour's exposures, each
+//      image within the sibling tolerance; the grown trail passes step 3 and
+//      must join its source (step 4); it seeds its own neighbours in turn;
+//   6. seeds a trail with no decoded sibling at one of its separator dashes
+//      (the dash's length gives the speed, its angle the direction, its flux
+//      the star's flux per second; each separator in each direction, exactly
+//      one reading must grow) and numbers it by the sibling it grows under
+//      exactly one trail number (a sibling on the arc, well fitted); then
+//      step 5 again from these.
 // Crowded fields (docs/trails.md): the run's and every taken image's flux must
 // fit the exposure's duration; an established track takes only images within
 // its prediction; trails off most of their images, images off the track amid
@@ -55,7 +66,7 @@ struct TrailOptions {
                                        // may lie off its predicted position
   double min_tolerance_px = 1.5;       // px; the tolerance never drops below this
   int min_exposures_after_run = 11;    // a trail must take this many exposures past its leading run
-  int max_missed_in_row = 5;           // growth stops after this many consecutive exposures without an image
+  int max_missed_in_row = 12;          // growth stops after this many consecutive exposures without an image
   double min_elongated_exposure_s = 5.0;  // s; an image flagged elongated only matches exposures at least this long
   double dash_length_tolerance = 0.3;  // fraction; an image with a measured length_px must match the exposure's
                                        // duration x rate within this (plus psf_fwhm_px), when length_px > 0
@@ -90,6 +101,15 @@ struct TrailOptions {
                                        // under a wrong number the prediction lands 10 s x the rate off a sibling's dot)
   double clean_radius_spacings = 1.0;  // a trail confirmed by no sibling is kept only when no other image lies within
                                        // this many dash spacings of the position one dash before its run
+  // Siblings grown from decoded trails (docs/trails.md, "Siblings"): a trail whose run was not found
+  // is grown from its decoded neighbour's track across the break.
+  bool grow_siblings = true;
+  double sibling_growth_window_s = 1500.0;  // s; the growing track is fitted to the images within this
+  // Trails grown from their separator dashes and numbered by their siblings' raw images (docs/trails.md,
+  // "Separators"): trails whose run was not found and that no decoded sibling reaches.
+  bool pattern_trails = true;
+  double motion_radius_px = 400.0;     // px; decoded trails within this give the local direction of motion
+  bool require_motion = false;         // true: no separator seed where that direction is unknown
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
   // beyond it (trail 3 minus one dash looks like a complete trail 2): the position one dash before
   // the run must lie inside by edge_margin_px, else the run is refused. Unset (max <= min):
@@ -97,6 +117,9 @@ struct TrailOptions {
   PixelPoint image_min_px{0.0, 0.0};
   PixelPoint image_max_px{0.0, 0.0};
   double edge_margin_px = 10.0;        // px
+  // The exposed format's outline (a convex polygon, px; a plate is exposed only inside its format, often
+  // smaller than the scan): the same checks as the scanned area. Empty: the scanned area alone.
+  std::vector<PixelPoint> exposed_outline_px;
   double max_link_px = 40.0;           // px; UNUSED (the growth predicts along the track); kept so that older
                                        // callers compile: set max_dash_spacing_px (30 s x the fastest rate) instead
   bool Check(std::string* why) const;
@@ -123,7 +146,7 @@ struct TrailImage {
   std::string reason;              // why not assigned: not_star, unlinked, at_edge, image_before_run,
                                    // short_pattern, ambiguous, contested, leading_dashes_incomplete,
                                    // doubtful_number, lone_trail, poor_track, unconfirmed, run_flux,
-                                   // off_track, unverified, blended;
+                                   // off_track, unverified, blended, unjoined, unresolved_run;
                                    // for bad (still assigned) images: bad_fit
 };
 

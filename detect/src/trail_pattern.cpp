@@ -1,0 +1,135 @@
+// A trail grown from one of its separator dashes, for trails whose leading run was not found
+// (trail_internal.h). The dash's measured length gives the star's speed (20 s of motion), its
+// angle the track's direction, its flux the star's flux per second: the neighbouring exposure's
+// image (a dot of known duration at a known time) is then predicted, and the growth does the rest.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "trail_internal.h"
+
+namespace platemeter::trail_internal {
+
+bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int reference, const PixelPoint* motion,
+                       const std::function<bool(int)>& excluded, PatternTrail* out) {
+  const TrailOptions& o = c.o;
+  const std::vector<ShutterExposure>& ex = c.per_trail[reference];
+  const DetectedStar& d = c.images[dash];
+  // A blend's flux and length would misread every exposure after it.
+  if (d.length_px <= 0 || d.flux_dn <= 0 || (d.flags & kStarBlended)) return false;
+  const double a = d.angle_deg * std::numbers::pi / 180.0;
+  int found = 0;
+  PatternTrail best;
+  for (int j = 0; j < static_cast<int>(ex.size()); ++j) {
+    if (ex[j].kind != ExposureKind::kDash || ex[j].group == 0) continue;  // separators only
+    const double rate = d.length_px / ex[j].duration_s;                 // px/s
+    const double flux_per_s = d.flux_dn / ex[j].duration_s;
+    if (!Compatible(c, dash, ex[j], {std::cos(a) * rate, std::sin(a) * rate}, 0.0)) continue;  // its length
+    for (int dir : {1, -1}) {
+      const double ux = dir * std::cos(a), uy = dir * std::sin(a);
+      if (motion && ux * motion->x_px + uy * motion->y_px <= 0) continue;  // the sky turns one way
+      // The neighbouring exposure (the next one, else the previous) holding exactly one compatible image.
+      int nb_exposure = -1, nb_image = -1;
+      for (int nb : {j + 1, j - 1}) {
+        if (nb < 0 || nb >= static_cast<int>(ex.size())) continue;
+        const double dt = ex[nb].mid_s - ex[j].mid_s;
+        const PixelPoint q{c.p[dash].x_px + ux * rate * dt, c.p[dash].y_px + uy * rate * dt};
+        const double tol = std::max(o.min_tolerance_px, o.match_tolerance * std::abs(dt) * rate);
+        int count = 0, image = -1;
+        all.Near(q.x_px, q.y_px, tol, [&](int i) {
+          if (i == dash || !c.usable[i] || (excluded && excluded(i)) ||
+              !Compatible(c, i, ex[nb], {ux * rate, uy * rate}, flux_per_s))
+            return;
+          ++count, image = i;
+        });
+        if (count == 1) {
+          nb_exposure = nb, nb_image = image;
+          break;
+        }
+      }
+      if (nb_exposure < 0) continue;
+      GrowSpec spec;
+      spec.exposures = &ex;
+      spec.seed = {{std::min(j, nb_exposure), nb_exposure < j ? nb_image : dash},
+                   {std::max(j, nb_exposure), nb_exposure < j ? dash : nb_image}};
+      spec.flux_per_s = flux_per_s;
+      spec.max_missed_in_row = o.max_missed_in_row;
+      spec.excluded = excluded;
+      spec.first = std::max(j, nb_exposure) + 1;
+      spec.step = 1;
+      const Growth later = Grow(c, all, spec);
+      spec.seed = later.taken;
+      spec.first = std::min(j, nb_exposure) - 1;
+      spec.step = -1;
+      const Growth both = Grow(c, all, spec);
+      if (static_cast<int>(both.taken.size()) < 1 + o.min_exposures_after_run) continue;
+      // The seed's flux must be the trail's: the median flux per second of the other images taken.
+      std::vector<double> per_s;
+      for (const auto& [k, i] : both.taken)
+        if (i != dash) per_s.push_back(c.images[i].flux_dn / ex[k].duration_s);
+      std::nth_element(per_s.begin(), per_s.begin() + per_s.size() / 2, per_s.end());
+      const double median_per_s = per_s[per_s.size() / 2];
+      if (std::abs(flux_per_s - median_per_s) > o.run_flux_tolerance * median_per_s + 4.0 * d.sigma_flux_dn / ex[j].duration_s)
+        continue;
+      if (++found > 1) return false;  // two readings of one dash: neither is trusted
+      best.taken = both.taken;
+      best.flux_per_s = flux_per_s;
+    }
+  }
+  if (found != 1) return false;
+  std::sort(best.taken.begin(), best.taken.end());
+  *out = best;
+  return true;
+}
+
+int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, int reference,
+                     const std::vector<int>& leading_dashes, const std::function<bool(int, int)>& other_number,
+                     SiblingGrowth* grown) {
+  const TrailOptions& o = c.o;
+  const int trails = static_cast<int>(leading_dashes.size());
+  int best = -1, count = 0;
+  for (int u = 0; u < trails; ++u) {
+    // The trail's images re-timed as trail u (exposure j of the reference is j + N_u - N_ref of trail u).
+    const int shift = leading_dashes[u] - leading_dashes[reference];
+    std::vector<std::pair<int, int>> as_u;
+    std::vector<double> ts;
+    std::vector<PixelPoint> ps;
+    for (const auto& [j, i] : pt.taken)
+      if (j + shift >= 0) as_u.push_back({j + shift, i}), ts.push_back(c.per_trail[u][j + shift].mid_s), ps.push_back(c.p[i]);
+    Track track;
+    if (ts.size() < 4 || !track.Fit(ts, ps, {}, {}, DegreeFor(static_cast<int>(ts.size()), ts.back() - ts.front(), o.track_degree)))
+      continue;
+    const PixelPoint v = track.VelocityAt(0.5 * (ts.front() + ts.back()));
+    const double rate = std::hypot(v.x_px, v.y_px);
+    const double gap_s = trails > 1 ? c.per_trail[1].front().mid_s - c.per_trail[0].back().mid_s : 0.0;
+    const double far_tol_px = o.sibling_tolerance_px + o.sibling_tolerance_fraction * rate * (gap_s + o.sibling_window_s);
+    if (10.0 * rate < 2.0 * far_tol_px) return -1;
+    bool grows = false;
+    for (int s : {u - 1, u + 1}) {
+      if (s < 0 || s >= trails || grows) continue;
+      std::vector<std::pair<int, int>> sibling;
+      const Growth g = GrowSibling(c, all, as_u, u, s, pt.flux_per_s, [&](int i) { return other_number(i, s); }, &sibling);
+      if (g.after_run < o.min_exposures_after_run) continue;
+      // The sibling's own track: its images on it to their precision, and on one arc with the trail's.
+      std::vector<double> st;
+      std::vector<PixelPoint> sp;
+      for (const auto& [j, i] : sibling) st.push_back(c.per_trail[s][j].mid_s), sp.push_back(c.p[i]);
+      Track sibling_track;
+      if (!sibling_track.Fit(st, sp, {}, {}, DegreeFor(static_cast<int>(st.size()), st.back() - st.front(), o.track_degree)))
+        continue;
+      std::vector<double> residual_px;
+      for (size_t k = 0; k < st.size(); ++k) residual_px.push_back(Dist(sibling_track.At(st[k]), sp[k]));
+      std::nth_element(residual_px.begin(), residual_px.begin() + residual_px.size() / 2, residual_px.end());
+      if (residual_px[residual_px.size() / 2] > std::max(o.max_median_residual_px, o.max_median_residual_fwhm * o.psf_fwhm_px))
+        continue;
+      if (!(s < u ? OnOneArc(o, sibling_track, st.back(), track, ts.front()) : OnOneArc(o, track, ts.back(), sibling_track, st.front())))
+        continue;
+      grows = true;
+      if (count == 0) *grown = {s, sibling, rate};
+    }
+    if (grows) best = u, ++count;
+  }
+  return count == 1 ? best : -1;
+}
+
+}  // namespace platemeter::trail_internal

@@ -657,7 +657,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     // Confirmed by a sibling grown from its track (on one arc, well fitted) under its number and no other;
     // single images on sibling exposures (`own`) do not confirm: in a crowded field other stars' images lie
     // within the tolerance of a few of them.
-    if (own >= options.min_sibling_images) {
+    {
       const int number = number_by_siblings(k);
       if (number == t) continue;
       if (number >= 0) {

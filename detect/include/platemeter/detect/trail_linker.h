@@ -46,9 +46,10 @@
 // fit the exposure's duration; an established track takes only images within
 // its prediction; trails off most of their images, images off the track amid
 // other images and images the track merely follows are refused; and a trail's
-// number must be confirmed by the raw images on its sibling trails' predicted
-// exposures (or by a join, or by a clean field around its run). Unassigned
-// with a reason is fine; wrong is not.
+// number must be confirmed by a join, or by a sibling grown from its track
+// under its number and no other, or by a clean field around its run (outside
+// the exposed format, exposed_outline_px, counts as unknown; a slow star's
+// unresolved run never is clean). Unassigned with a reason is fine; wrong is not.
 #include <string>
 #include <vector>
 

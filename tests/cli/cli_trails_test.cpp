@@ -14,6 +14,7 @@
 
 #include "platemeter/calib/star_catalog.h"
 #include "platemeter/measure/measurement_file.h"
+#include "support/orbigon_trails.h"
 #include "support/test_support.h"
 
 namespace platemeter {
@@ -22,41 +23,15 @@ namespace {
 using testing::RunPlatemeter;
 using testing::TempDir;
 
-// The photometry of tests/detect/trail_linker_test.cpp: the 0.6 s dots of the faintest stars at SNR ~6.
-constexpr const char* kSpec = R"(
-name = "trails"
-camera = "orbigon"
-seed = 5
-[output]
-pixel_size_um = 12.5
-[stars]
-fwhm_um = 30
-reference_magnitude = 3.5
-reference_peak_dn = 2500
-[star_field]
-latitude_deg = 39.03
-longitude_deg = -76.93
-height_m = 50
-start_utc = "1972-05-12T05:30:00Z"
-magnitude_limit = 3.5
-[noise]
-sensor_sigma_dn = 20
-grain_sigma_dn = 20
-)";
-
-// Seconds after 05:30:00 of "1972-05-12Thh:mm:ss.sssZ" (independent of the tool).
-double SecondsAfter0530(const std::string& iso) {
-  int h = 0, mi = 0;
-  double s = 0;
-  EXPECT_EQ(std::sscanf(iso.c_str() + 11, "%d:%d:%lf", &h, &mi, &s), 3) << iso;
-  return (h - 5) * 3600.0 + (mi - 30) * 60.0 + s;
-}
+using testing::OrbigonTrailSpec;
+using testing::SecondsAfter0530;
 
 TEST(CliTrails, DetectWritesTimeTaggedTrailDotsThatMatchTheTruth) {
   if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
     GTEST_FAIL() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
   TempDir dir;
-  std::ofstream(dir.file("trails.toml")) << kSpec;
+  // The photometry of tests/detect/trail_linker_test.cpp: the 0.6 s dots of the faintest stars at SNR ~6.
+  std::ofstream(dir.file("trails.toml")) << OrbigonTrailSpec("trails", 3.5, 3.5, 2500.0, 12.5, 20.0);
   ASSERT_EQ(RunPlatemeter("simulate '" + dir.file("trails.toml") + "' -o '" + dir.file("sim") + "' -q").exit_code, 0);
   const auto r = RunPlatemeter("detect '" + dir.file("sim/trails.tif") +
                                "' --camera orbigon --orientation 0 --stars --star-fwhm-px 2.4 "

@@ -112,6 +112,20 @@ Comparison Compare(const PasspointDetection& found, const std::vector<MeasuredPo
   return c;
 }
 
+// The marks no dust disk reaches (mark_radius_px + 4 px of it) and how many of them were measured.
+std::pair<int, int> CleanMarks(const Rendered& r, const Comparison& c, double mark_radius_px) {
+  int clean = 0, found = 0;
+  for (const MeasuredPoint& t : r.truth) {
+    bool touched = false;
+    for (const auto& [centre, radius] : r.dust)
+      touched = touched || std::hypot(centre.x_px - *t.x_px, centre.y_px - *t.y_px) < radius + mark_radius_px + 4.0;
+    if (touched) continue;
+    ++clean;
+    found += c.id_of_truth.count(t.id) > 0;
+  }
+  return {clean, found};
+}
+
 // The bundled plate, rendered once for the tests that use it as it is.
 class BundledPlate : public ::testing::Test {
  protected:
@@ -271,15 +285,7 @@ TEST(PasspointDetector, BrightRingsAmongDustOfTheSameSize) {
   std::printf("%s\n", found.summary.c_str());
   const Comparison c = Compare(found, r.truth);
   // Rings touched by dust may be rejected (or lost); every clean one is measured.
-  int clean = 0, clean_found = 0;
-  for (const MeasuredPoint& t : r.truth) {
-    bool touched = false;
-    for (const auto& [centre, radius] : r.dust)
-      touched = touched || std::hypot(centre.x_px - *t.x_px, centre.y_px - *t.y_px) < radius + 6.25 + 4.0;
-    if (touched) continue;
-    ++clean;
-    clean_found += c.id_of_truth.count(t.id) > 0;
-  }
+  const auto [clean, clean_found] = CleanMarks(r, c, 6.25);
   std::printf("clean rings %d, measured %d; RMS/CRB %.3f, RMS error/sigma %.3f\n", clean, clean_found,
               c.rms_error_px / c.rms_crb_px, c.rms_normalized);
   EXPECT_GE(clean, 20);
@@ -308,15 +314,7 @@ TEST(PasspointDetector, DotsAmongSmallerDust) {
   const PasspointDetection found = DetectPasspoints(image, options);
   std::printf("%s\n", found.summary.c_str());
   const Comparison c = Compare(found, r.truth);
-  int clean = 0, clean_found = 0;
-  for (const MeasuredPoint& t : r.truth) {
-    bool touched = false;
-    for (const auto& [centre, radius] : r.dust)
-      touched = touched || std::hypot(centre.x_px - *t.x_px, centre.y_px - *t.y_px) < radius + 4.0 + 4.0;
-    if (touched) continue;
-    ++clean;
-    clean_found += c.id_of_truth.count(t.id) > 0;
-  }
+  const auto [clean, clean_found] = CleanMarks(r, c, 4.0);
   std::printf("clean dots %d, measured %d; RMS error %.4f px, RMS CRB %.4f px, RMS/CRB %.3f, RMS error/sigma %.3f\n",
               clean, clean_found, c.rms_error_px, c.rms_crb_px, c.rms_error_px / c.rms_crb_px, c.rms_normalized);
   EXPECT_GE(clean, 20);

@@ -26,36 +26,17 @@
 #include "platemeter/grids/registry.h"
 #include "platemeter/samples/simulate.h"
 #include "platemeter/samples/spec.h"
+#include "support/orbigon_trails.h"
 
 namespace platemeter {
 namespace {
 
-// A whole Orbigon plate with the catalog stars to magnitude_limit (V = 7: thousands of crossing trails).
-std::string FieldSpec(double magnitude_limit) {
-  return R"(
-name = "crowded-trails"
-camera = "orbigon"
-seed = 5
-[output]
-pixel_size_um = 12.5
-[stars]
-fwhm_um = 30
-reference_magnitude = 5.0
-reference_peak_dn = 6000
-[star_field]
-latitude_deg = 39.03
-longitude_deg = -76.93
-height_m = 50
-start_utc = "1972-05-12T05:30:00Z"
-magnitude_limit = )" + std::to_string(magnitude_limit) + "\n";
-}
+using testing::OrbigonFormatOutline_px;
+using testing::OrbigonTrailSpec;
+using testing::SecondsAfter0530;
 
-double SecondsAfter0530(const std::string& iso) {
-  int h = 0, mi = 0;
-  double s = 0;
-  EXPECT_EQ(std::sscanf(iso.c_str() + 11, "%d:%d:%lf", &h, &mi, &s), 3) << iso;
-  return (h - 5) * 3600.0 + (mi - 30) * 60.0 + s;
-}
+// A whole Orbigon plate with the catalog stars to magnitude_limit (V = 7: thousands of crossing trails).
+std::string FieldSpec(double magnitude_limit) { return OrbigonTrailSpec("crowded-trails", magnitude_limit, 5.0, 6000.0); }
 
 struct TrueImage {
   const MeasuredPoint* truth;
@@ -164,15 +145,7 @@ std::unique_ptr<Field> BuildField(const std::string& spec, const std::function<b
   TrailOptions& to = field->options;
   to.psf_fwhm_px = fwhm_px;
   to.max_dash_spacing_px = 40.0;  // 30 s at the fastest rate (~0.94 px/s at 12.5 um)
-  // The exposed format (114 mm square: the simulator drops images outside it), in pixels.
-  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-  for (double u : {-57.0, 57.0})
-    for (double v : {-57.0, 57.0}) {
-      const PixelPoint c = plate.chain.PixelFromPlate({u, v});
-      x0 = std::min(x0, c.x_px), x1 = std::max(x1, c.x_px), y0 = std::min(y0, c.y_px), y1 = std::max(y1, c.y_px);
-    }
-  to.image_min_px = {x0, y0};
-  to.image_max_px = {x1, y1};
+  to.exposed_outline_px = OrbigonFormatOutline_px(plate);  // the simulator draws no image outside the format
   return field;
 }
 

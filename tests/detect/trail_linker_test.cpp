@@ -25,38 +25,19 @@
 #include "platemeter/samples/render_crb.h"
 #include "platemeter/samples/simulate.h"
 #include "platemeter/samples/spec.h"
+#include "support/orbigon_trails.h"
 
 namespace platemeter {
 namespace {
 
-// Seconds after 05:30:00 of an ISO time "1972-05-12Thh:mm:ss.sssZ" (independent of the linker).
-double SecondsAfter0530(const std::string& iso) {
-  int h = 0, mi = 0;
-  double s = 0;
-  EXPECT_EQ(std::sscanf(iso.c_str() + 11, "%d:%d:%lf", &h, &mi, &s), 3) << iso;
-  return (h - 5) * 3600.0 + (mi - 30) * 60.0 + s;
-}
+using testing::OrbigonFormatOutline_px;
+using testing::OrbigonTrailSpec;
+using testing::SecondsAfter0530;
 
-constexpr const char* kSpec = R"(
-name = "trails"
-camera = "orbigon"
-seed = 5
-[output]
-pixel_size_um = 12.5
-[stars]
-fwhm_um = 30
-reference_magnitude = 2.5
-reference_peak_dn = 2500
-[star_field]
-latitude_deg = 39.03
-longitude_deg = -76.93
-height_m = 50
-start_utc = "1972-05-12T05:30:00Z"
-magnitude_limit = 2.5
-[noise]
-sensor_sigma_dn = 20
-grain_sigma_dn = 20
-)";
+// The plate of the tests below: catalog stars to V = 2.5 (experiments: TRAIL_MAG) at 12.5 um.
+std::string Spec(double magnitude = 2.5, double pixel_size_um = 12.5) {
+  return OrbigonTrailSpec("trails", magnitude, magnitude, 2500.0, pixel_size_um, 20.0);
+}
 
 TEST(TrailLinker, OptionsAreChecked) {
   TrailOptions o;
@@ -145,16 +126,11 @@ BandRun RunBand(const std::string& spec, double pixel_um, long band_rows, double
 // a 20 s dash is 5-19 px long, its 10 s gaps 2.5-9 px (the PSF's FWHM is 2.4 px).
 const BandRun& Band() {
   static const BandRun band = [] {
-    std::string spec = kSpec;
-    // Experiments (docs/trails.md): TRAIL_MAG sets both to another magnitude (more, fainter stars).
-    const std::string mag = std::getenv("TRAIL_MAG") ? std::getenv("TRAIL_MAG") : "3.5";
-    spec.replace(spec.find("reference_magnitude = 2.5"), 25, "reference_magnitude = " + mag);
-    spec.replace(spec.find("magnitude_limit = 2.5"), 21, "magnitude_limit = " + mag);
-    double pixel_um = 12.5;
-    if (const char* p = std::getenv("TRAIL_PIXEL_UM")) {  // experiments: other pixel sizes (docs/trails.md)
-      pixel_um = std::atof(p);
-      spec.replace(spec.find("pixel_size_um = 12.5"), 20, "pixel_size_um = " + std::string(p));
-    }
+    // Experiments (docs/trails.md): TRAIL_MAG sets the magnitude limit and reference to another magnitude
+    // (more, fainter stars), TRAIL_PIXEL_UM another pixel size.
+    const double mag = std::getenv("TRAIL_MAG") ? std::atof(std::getenv("TRAIL_MAG")) : 3.5;
+    const double pixel_um = std::getenv("TRAIL_PIXEL_UM") ? std::atof(std::getenv("TRAIL_PIXEL_UM")) : 12.5;
+    std::string spec = Spec(mag, pixel_um);
     if (const char* path = std::getenv("TRAIL_SPEC")) {  // experiments: another spec (its pixel size: TRAIL_PIXEL_UM)
       std::ifstream in(path);
       spec.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
@@ -376,7 +352,7 @@ TEST(TrailLinker, DecodesTheTrueImagesOfAWholePlate) {
   if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
     GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
   const sim::SimulatedPlate plate =
-      sim::BuildSimulatedPlate(sim::ParseSimulationSpec(kSpec, "trails.toml"), DefinitionRegistry());
+      sim::BuildSimulatedPlate(sim::ParseSimulationSpec(Spec(), "trails.toml"), DefinitionRegistry());
   std::vector<DetectedStar> found;
   std::vector<const MeasuredPoint*> source;  // truth row of each detection (nullptr: stray)
   // Decodable trails: all 25 dots and all N + 4 dashes on the format (the others are cut by its edge).
@@ -412,15 +388,7 @@ TEST(TrailLinker, DecodesTheTrueImagesOfAWholePlate) {
   }
   TrailOptions to;
   to.max_dash_spacing_px = 40.0;  // 30 s at the fastest rate (~0.94 px/s at 12.5 um)
-  // The exposed format (114 mm square: the simulator drops images outside it), in pixels.
-  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-  for (double u : {-57.0, 57.0})
-    for (double v : {-57.0, 57.0}) {
-      const PixelPoint c = plate.chain.PixelFromPlate({u, v});
-      x0 = std::min(x0, c.x_px), x1 = std::max(x1, c.x_px), y0 = std::min(y0, c.y_px), y1 = std::max(y1, c.y_px);
-    }
-  to.image_min_px = {x0, y0};
-  to.image_max_px = {x1, y1};
+  to.exposed_outline_px = OrbigonFormatOutline_px(plate);  // the simulator draws no image outside the format
   const TrailLinkResult r = LinkTrails(found, DutyCycleScheduleOptions{}, to);
   ASSERT_EQ(r.images.size(), found.size());
   long right = 0, wrong = 0, strays_assigned = 0;

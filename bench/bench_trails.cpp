@@ -164,7 +164,7 @@ int main(int argc, char** argv) {
   double pixel_um = 20.0, mag_limit = 8.0, min_snr = 10.0, ref_peak_dn = 60000.0, sensor_dn = 30.0, grain_dn = 60.0;
   double isolation_fwhm = 3.0;
   long band_rows = 0;
-  std::string keep;
+  std::string keep, lost_file;  // --lost FILE: every measurable dot not right, and its star's dashes (for debugging)
   bool sep = true, reuse = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -186,8 +186,9 @@ int main(int argc, char** argv) {
     else if (a == "--keep") keep = next();
     else if (a == "--no-sep") sep = false;
     else if (a == "--reuse") reuse = true;
+    else if (a == "--lost") lost_file = next();
     else {
-      std::fprintf(stderr, "usage: bench_trails [--pixel-um 20] [--mag-limit 8] [--rows N] [--min-snr 20] [--keep DIR [--reuse]] [--no-sep]\n");
+      std::fprintf(stderr, "usage: bench_trails [--pixel-um 20] [--mag-limit 8] [--rows N] [--min-snr 20] [--keep DIR [--reuse]] [--no-sep] [--lost FILE]\n");
       return 2;
     }
   }
@@ -320,6 +321,8 @@ int main(int argc, char** argv) {
   long wrong = 0, no_truth = 0, tagged = 0, blend_right = 0, flagged_bad = 0;
   std::map<std::string, std::set<int>> truth_stars_of;  // found star -> truth stars
   std::map<int, std::set<std::string>> found_stars_of;  // truth star -> found stars
+  std::map<std::string, std::map<std::pair<int, int>, int>> truth_images_of;  // found star -> (truth star, trail)
+                                                                            // -> images tagged right
   std::map<const TruthImage*, std::string> found_star_of_dot;
   double err2 = 0, norm2 = 0;
   long n_err = 0;
@@ -337,8 +340,6 @@ int main(int argc, char** argv) {
       if (++no_truth <= 5) std::printf("  no truth image within 1.5 px: %s at %.2f %.2f\n", m.id.c_str(), *m.x_px, *m.y_px);
       continue;
     }
-    truth_stars_of[m.star_id].insert(t->star);
-    found_stars_of[t->star].insert(m.star_id);
     auto tag_of = [&](const TruthImage& u) {
       return u.dot == (m.kind == PointKind::kTrailDot) && "T" + std::to_string(u.trail) == m.trail && u.index == m.dot &&
              std::abs(u.mid_s - Seconds(m.mid_time_utc)) < 0.002;
@@ -362,6 +363,10 @@ int main(int argc, char** argv) {
                     t->index, m.id.c_str(), m.mid_time_utc.c_str());
       continue;
     }
+    // The star: counted from rightly tagged images only (a blend is reported above).
+    truth_stars_of[m.star_id].insert(t->star);
+    found_stars_of[t->star].insert(m.star_id);
+    ++truth_images_of[m.star_id][{t->star, t->trail}];
     if (!whole(*t)) continue;
     right.insert(t);
     found_star_of_dot[t] = m.star_id;
@@ -372,7 +377,14 @@ int main(int argc, char** argv) {
     ++n_err;
   }
   long mixed = 0, split = 0;
-  for (const auto& [found, truths] : truth_stars_of) mixed += truths.size() > 1;
+  for (const auto& [found, truths] : truth_stars_of) {
+    if (truths.size() < 2) continue;
+    if (++mixed > 5) continue;
+    std::printf("  found star %s holds right tags of", found.c_str());
+    for (const auto& [truth, count] : truth_images_of[found])
+      std::printf(" %s-T%d (%d)", star_names[truth.first].c_str(), truth.second, count);
+    std::printf("\n");
+  }
   for (const auto& [t, founds] : found_stars_of) split += founds.size() > 1;
   // The right star: the found star holds this truth star's images only.
   long right_measurable = 0, right_measurable_star = 0, right_whole_star = 0;
@@ -414,6 +426,8 @@ int main(int argc, char** argv) {
       }
     const TruthIndex found_index(at, 4.0);
     std::map<std::string, long> lost;
+    FILE* lost_out = lost_file.empty() ? nullptr : std::fopen(lost_file.c_str(), "w");
+    std::set<int> lost_stars;
     for (const TruthImage& t : truth_images) {
       if (!counted(t) || right.count(&t)) continue;
       const TruthImage* f = found_index.Nearest(t.x_px, t.y_px, 1.5);
@@ -426,6 +440,14 @@ int main(int argc, char** argv) {
       }
       why += trails_right.count({t.star, t.trail}) ? " (trail partly right)" : stars_right.count(t.star) ? " (another trail of the star right)" : " (nothing of the star right)";
       ++lost[why];
+      if (lost_out) std::fprintf(lost_out, "dot %s T%d %d %.3f %.3f %s\n", star_names[t.star].c_str(), t.trail, t.index, t.x_px, t.y_px, why.c_str());
+      if (lost_out) lost_stars.insert(t.star);
+    }
+    if (lost_out) {
+      for (const TruthImage& t : truth_images)
+        if (!t.dot && lost_stars.count(t.star))
+          std::fprintf(lost_out, "dash %s T%d %d %.3f %.3f\n", star_names[t.star].c_str(), t.trail, t.index, t.x_px, t.y_px);
+      std::fclose(lost_out);
     }
     std::printf("measurable dots not right, by the detection's reason:\n");
     std::vector<std::pair<long, std::string>> rows;

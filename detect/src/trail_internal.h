@@ -9,6 +9,7 @@
 
 #include "platemeter/core/duty_cycle.h"
 #include "platemeter/core/pixel.h"
+#include "platemeter/detect/sky_flow.h"
 #include "platemeter/detect/star_detector.h"
 #include "platemeter/detect/trail_linker.h"
 
@@ -41,7 +42,11 @@ class Track {
   double reduced_chi2_ = 1.0;
 };
 
-inline double Dist(const PixelPoint& a, const PixelPoint& b) { return std::hypot(a.x_px - b.x_px, a.y_px - b.y_px); }
+// (sqrt, not hypot: pixel coordinates cannot overflow, and the linker's inner loops call this most)
+inline double Dist(const PixelPoint& a, const PixelPoint& b) {
+  const double dx = a.x_px - b.x_px, dy = a.y_px - b.y_px;
+  return std::sqrt(dx * dx + dy * dy);
+}
 
 // Spatial hash of points in cells of `cell` px.
 class Grid {
@@ -191,5 +196,32 @@ struct SiblingGrowth {
 int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, int reference,
                      const std::vector<int>& leading_dashes, const std::function<bool(int, int)>& other_number,
                      SiblingGrowth* grown);
+
+// The plate's flow (trail_flow.cpp, docs/trails.md "The plate's flow").
+// Samples of a decoded trail's motion for SkyFlow::Fit: its track's position and velocity at its images'
+// times (t_s), the outer tenth of its span at either end left out (a cubic's ends bend).
+void AddFlowSamples(const Track& track, const std::vector<double>& t_s, std::vector<PixelPoint>* p,
+                    std::vector<PixelPoint>* velocity_px_per_s);
+
+// The images of one star found along its flow path, per trail (0-based): (exposure in the trail, image).
+struct FlowStar {
+  std::vector<std::vector<std::pair<int, int>>> taken;
+  double flux_per_s = 0.0;
+  int hits = 0;  // images taken over all trails
+};
+// Every exposure of the trails in `trail_mask` (bit t: trail t, 0-based) predicted along `path` (the star
+// was at the path's origin at t_origin_s): the one compatible image (flux per second, length, direction)
+// within flow_tolerance_px + flow_tolerance_fraction x its distance from the origin is taken; none or
+// several leave the exposure untaken.
+FlowStar CollectAlongFlow(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& origin,
+                          double t_origin_s, double flux_per_s, unsigned trail_mask,
+                          const std::function<bool(int)>& excluded);
+// The star of an unassigned dash (not a blend) decoded by the flow: the dash read as every dash exposure of
+// the plate (its length must be 20 s of the flow's motion there, along it). Exactly one reading may line up
+// a trail of 5 images and 3 dots of another, and it must be decoded: the dash taken as that exposure, a
+// trail of flow_min_images, 4 dots of a second trail, 2 other dashes and images of 4 of the 6 exposure
+// durations (trail_flow.cpp says why). A slow star (10 s of motion within four tolerances) is not decoded.
+bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int dash,
+                  const std::function<bool(int)>& excluded, FlowStar* out);
 
 }  // namespace platemeter::trail_internal

@@ -38,6 +38,8 @@ bool TrailOptions::Check(std::string* why) const {
   if (!(clean_radius_spacings >= 0)) return fail("clean_radius_spacings must be >= 0");
   if (!(sibling_growth_window_s > 0)) return fail("sibling_growth_window_s must be > 0");
   if (!(sibling_tolerance_px > 0) || !(sibling_tolerance_fraction >= 0)) return fail("sibling_tolerance_px must be > 0");
+  if (flow_degree < 1 || flow_degree > 10) return fail("flow_degree must lie in 1..10");
+  if (!(flow_tolerance_px > 0) || !(flow_tolerance_fraction >= 0)) return fail("flow_tolerance_px must be > 0");
   return true;
 }
 
@@ -420,8 +422,10 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   };
   // 3. The sidereal fit and the crowded-field checks of one trail (images: (exposure, image)); false:
   // the trail is refused and its tags taken back.
-  auto settle = [&](int cid, const std::vector<std::pair<int, int>>& taken) -> bool {
+  // A trail must keep min_images (0: its leading dashes + half of min_exposures_after_run).
+  auto settle = [&](int cid, const std::vector<std::pair<int, int>>& taken, int min_images = 0) -> bool {
     TrailChain& tc = result.chains[cid];
+    if (min_images <= 0) min_images = tc.leading_dashes + options.min_exposures_after_run / 2;
     const std::vector<ShutterExposure>& ex = c.per_trail[tc.trail - 1];
     std::vector<std::pair<int, int>> kept;
     tc.images.clear();
@@ -445,8 +449,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       (s.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
     }
     // 3. The sidereal fit (a trail left with too few images after the contested ones is refused).
-    if (static_cast<int>(kept.size()) < tc.leading_dashes + options.min_exposures_after_run / 2 ||
-        !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
+    if (static_cast<int>(kept.size()) < min_images || !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
       refuse(tc, kept, "contested");
       return false;
     }
@@ -517,8 +520,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       {  // the track without them
         tc.bad_images = 0;
         for (const auto& [j, i] : kept) result.images[i].bad = false, result.images[i].reason.clear();
-        if (static_cast<int>(kept.size()) < tc.leading_dashes + options.min_exposures_after_run / 2 ||
-            !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
+        if (static_cast<int>(kept.size()) < min_images || !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
           refuse(tc, kept, "off_track");
           refused = true;
           break;
@@ -714,7 +716,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     if (decoded(k)) numbers[Root(parent, k)] |= 1 << (result.chains[k].trail - 1);
   // A new chain (trail number s, its images (exposure, image)) as a star of its own; false when refused.
   auto add_chain = [&](int s, const std::vector<std::pair<int, int>>& taken, double flux_per_s, double rate_px_per_s,
-                       int missed) {
+                       int missed, int min_images = 0) {
     const int cid = static_cast<int>(result.chains.size());
     TrailChain tc;
     tc.trail = s + 1;
@@ -728,7 +730,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     parent.push_back(cid);
     numbers.push_back(1 << s);
     flux_of[cid] = flux_per_s;
-    return settle(cid, taken);
+    return settle(cid, taken, min_images);
   };
   auto GrowSiblings = [&] {
     std::vector<int> frontier;
@@ -838,11 +840,87 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       }
     }
   };
+  // 7. The plate's flow (trail_flow.cpp): one motion field fitted to every decoded trail's track. A decoded
+  // star's missing trails are collected along it (their exposures' times are known); then every unassigned
+  // dash is read as each dash exposure of the program, and a star is decoded when exactly one reading finds
+  // its images in two trails or more.
+  auto FlowTrails = [&] {
+    std::vector<PixelPoint> samples_p, samples_v;
+    int sampled_trails = 0;
+    for (int k = 0; k < static_cast<int>(result.chains.size()); ++k) {
+      if (!decoded(k) || static_cast<int>(kept_of[k].size()) < options.min_exposures_after_run) continue;
+      std::vector<double> ts;
+      for (const auto& [j, i] : kept_of[k]) ts.push_back(result.images[i].mid_s);
+      trail_internal::AddFlowSamples(tracks[k], ts, &samples_p, &samples_v);
+      ++sampled_trails;
+    }
+    // A polynomial of degree d has (d + 1)(d + 2) / 2 terms: at least as many trails, spread over the plate.
+    SkyFlow flow;
+    for (int degree = options.flow_degree; degree >= 2 && !flow.ok(); --degree)
+      if (sampled_trails >= (degree + 1) * (degree + 2) / 2) flow.Fit(samples_p, samples_v, degree);
+    if (!flow.ok()) return;
+    double t_first = 1e300, t_last = -1e300;
+    for (const ShutterExposure& e : schedule) t_first = std::min(t_first, e.mid_s), t_last = std::max(t_last, e.mid_s);
+    const auto excluded = [&](int i) { return result.images[i].chain >= 0; };
+    const unsigned every_trail = (1u << trails) - 1u;
+    // Adds the trails of `star` holding enough images to the star of `root` (-1: a new star).
+    auto add_star = [&](const trail_internal::FlowStar& star, double rate_px_per_s, int root) {
+      for (int s = 0; s < trails; ++s) {
+        if (static_cast<int>(star.taken[s].size()) < options.flow_min_images) continue;
+        if (root >= 0 && (numbers[Root(parent, root)] >> s & 1)) continue;
+        const int cid = static_cast<int>(result.chains.size());
+        // (the flow fixes its timing: no leading dashes needed)
+        if (!add_chain(s, star.taken[s], star.flux_per_s, rate_px_per_s, 0, options.flow_min_images)) continue;
+        if (root < 0) {
+          root = cid;
+          continue;
+        }
+        const int r = Root(parent, root);
+        numbers[r] |= numbers[Root(parent, cid)];
+        parent[Root(parent, cid)] = r;
+      }
+    };
+    // Decoded stars' missing trails, from the middle of their longest trail.
+    std::unordered_map<int, int> longest;  // star root -> its trail with the most images
+    for (int k = 0; k < static_cast<int>(result.chains.size()); ++k) {
+      if (!decoded(k)) continue;
+      int& best = longest.try_emplace(Root(parent, k), k).first->second;
+      if (kept_of[k].size() > kept_of[best].size()) best = k;
+    }
+    std::vector<std::pair<int, int>> stars_to_complete(longest.begin(), longest.end());
+    std::sort(stars_to_complete.begin(), stars_to_complete.end());
+    for (const auto& [root, k] : stars_to_complete) {
+      const unsigned missing = every_trail & ~static_cast<unsigned>(numbers[Root(parent, root)]);
+      if (!missing) continue;
+      double t0 = 0, t1 = 0;
+      ends(k, &t0, &t1);
+      const double t_mid = 0.5 * (t0 + t1);
+      const PixelPoint origin = tracks[k].At(t_mid);
+      const FlowPath path(flow, origin, t_last - t_first, 30.0, [&](const PixelPoint& q) { return trail_internal::Inside(options, q, -50.0); });
+      const trail_internal::FlowStar star =
+          trail_internal::CollectAlongFlow(c, all, path, origin, t_mid, flux_of.at(k), missing, excluded);
+      const PixelPoint v = flow.Velocity(origin);
+      add_star(star, std::hypot(v.x_px, v.y_px), root);
+    }
+    // Stars decoded from any of their dashes.
+    std::vector<int> seeds;
+    for (int i : dash_ids)
+      if (result.images[i].chain < 0) seeds.push_back(i);
+    std::sort(seeds.begin(), seeds.end(), [&](int x, int y) { return images[x].flux_dn > images[y].flux_dn; });
+    for (int dash : seeds) {
+      if (result.images[dash].chain >= 0) continue;
+      trail_internal::FlowStar star;
+      if (!trail_internal::DecodeByFlow(c, all, flow, dash, excluded, &star)) continue;
+      const PixelPoint v = flow.Velocity(c.p[dash]);
+      add_star(star, std::hypot(v.x_px, v.y_px), -1);
+    }
+  };
   if (options.grow_siblings) GrowSiblings();
   if (options.pattern_trails) {
     PatternTrails();
     if (options.grow_siblings) GrowSiblings();
   }
+  if (options.flow_trails) FlowTrails();
   // A star may hold each trail number once; otherwise its trails stay stars of their own.
   std::unordered_map<int, std::vector<int>> members;
   for (int k = 0; k < static_cast<int>(result.chains.size()); ++k)

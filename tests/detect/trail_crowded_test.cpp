@@ -215,13 +215,20 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   const Score loose_score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, loose), false);
   std::printf("[crowded, checks off] %ld tagged right, %ld wrong\n", loose_score.right, loose_score.wrong);
   EXPECT_GT(loose_score.wrong, 0);
-  // Without the sibling growth and the separator seeds (docs/trails.md, "Hidden runs") fewer are found.
+  // Without the sibling growth, the separator seeds and the plate's flow (docs/trails.md, "Hidden runs",
+  // "The plate's flow") fewer are found; without the flow alone, fewer too.
   TrailOptions runs_only = field->options;
-  runs_only.grow_siblings = runs_only.pattern_trails = false;
+  runs_only.grow_siblings = runs_only.pattern_trails = runs_only.flow_trails = false;
   const Score runs_score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, runs_only), false);
   std::printf("[crowded, leading runs only] %ld tagged right, %ld wrong\n", runs_score.right, runs_score.wrong);
   EXPECT_EQ(runs_score.wrong, 0);
   EXPECT_LT(runs_score.right, score.right * 9 / 10);
+  TrailOptions no_flow = field->options;
+  no_flow.flow_trails = false;
+  const Score no_flow_score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, no_flow), false);
+  std::printf("[crowded, without the flow] %ld tagged right, %ld wrong\n", no_flow_score.right, no_flow_score.wrong);
+  EXPECT_EQ(no_flow_score.wrong, 0);
+  EXPECT_LT(no_flow_score.right, score.right);
 }
 
 // Trails whose leading runs are wholly lost (merged into crossing images, or under dust) are still
@@ -243,7 +250,7 @@ TEST(TrailCrowded, TrailsWithoutTheirLeadingRunAreDecodedFromTheirSiblings) {
     const TrailLinkResult r = LinkTrails(field->found, DutyCycleScheduleOptions{}, field->options);
     const Score score = ScoreField(*field, r, true);
     TrailOptions runs_only = field->options;
-    runs_only.grow_siblings = runs_only.pattern_trails = false;
+    runs_only.grow_siblings = runs_only.pattern_trails = runs_only.flow_trails = false;
     const Score before = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, runs_only), false);
     std::printf("[no runs: %s] %ld unmerged dots of whole trails, %ld tagged right (leading runs only: %ld), %ld wrong; %s\n",
                 all_trails ? "every trail" : "T2, T3", score.clean_dots, score.right, before.right, score.wrong,

@@ -41,7 +41,12 @@
 //      the star's flux per second; each separator in each direction, exactly
 //      one reading must grow) and numbers it by the sibling it grows under
 //      exactly one trail number (a sibling on the arc, well fitted); then
-//      step 5 again from these.
+//      step 5 again from these;
+//   7. fits the plate's flow (detect/sky_flow.h: every star image moves with
+//      one velocity field) to the decoded tracks; collects decoded stars'
+//      missing trails along it; reads every unassigned dash as each dash
+//      exposure of the program and decodes its star when exactly one reading
+//      lines up its images in two trails (docs/trails.md, "The plate's flow").
 // Crowded fields (docs/trails.md): the run's and every taken image's flux must
 // fit the exposure's duration; an established track takes only images within
 // its prediction; trails off most of their images, images off the track amid
@@ -111,6 +116,14 @@ struct TrailOptions {
   bool pattern_trails = true;
   double motion_radius_px = 400.0;     // px; decoded trails within this give the local direction of motion
   bool require_motion = false;         // true: no separator seed where that direction is unknown
+  // The plate's flow (docs/trails.md, "The plate's flow"): one motion field for every star, fitted to the
+  // decoded trails; stars decoded from any of their dashes by the whole program's timing, decoded stars'
+  // missing trails found along it.
+  bool flow_trails = true;
+  int flow_degree = 6;                 // polynomial degree of the velocity field (the Orbigon's distortion needs 6)
+  double flow_tolerance_px = 0.4;      // px; an image predicted by the flow must lie within this plus
+  double flow_tolerance_fraction = 2e-4;  // this fraction of its distance from the image it was predicted from
+  int flow_min_images = 8;             // images a trail found along the flow must hold (a new star: two such trails)
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
   // beyond it (trail 3 minus one dash looks like a complete trail 2): the position one dash before
   // the run must lie inside by edge_margin_px, else the run is refused. Unset (max <= min):

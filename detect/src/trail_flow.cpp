@@ -1,0 +1,143 @@
+// Trails decoded by the plate's flow (trail_internal.h; docs/trails.md "The plate's flow"): every
+// star moves with one flow, so one image of a star at a known time predicts all its other images to
+// a fraction of a pixel across the whole plate. A dash read as each dash exposure of the program
+// predicts the star's ~130 images; only the right reading finds them in several trails (the trails'
+// different leading-dash counts shift their dot programs 30 s against each other: a wrong reading
+// lines up one trail, or a few dots of each).
+#include <algorithm>
+#include <cmath>
+
+#include "trail_internal.h"
+
+namespace platemeter::trail_internal {
+
+void AddFlowSamples(const Track& track, const std::vector<double>& t_s, std::vector<PixelPoint>* p,
+                    std::vector<PixelPoint>* velocity_px_per_s) {
+  if (t_s.empty()) return;
+  const auto [lo, hi] = std::minmax_element(t_s.begin(), t_s.end());
+  const double margin = 0.1 * (*hi - *lo);
+  for (double t : t_s) {
+    if (t < *lo + margin || t > *hi - margin) continue;
+    p->push_back(track.At(t));
+    velocity_px_per_s->push_back(track.VelocityAt(t));
+  }
+}
+
+FlowStar CollectAlongFlow(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& origin,
+                          double t_origin_s, double flux_per_s, unsigned trail_mask,
+                          const std::function<bool(int)>& excluded) {
+  const TrailOptions& o = c.o;
+  FlowStar out;
+  out.flux_per_s = flux_per_s;
+  out.taken.resize(c.per_trail.size());
+  for (size_t t = 0; t < c.per_trail.size(); ++t) {
+    if (!(trail_mask >> t & 1u)) continue;
+    const std::vector<ShutterExposure>& ex = c.per_trail[t];
+    for (int j = 0; j < static_cast<int>(ex.size()); ++j) {
+      const double dt = ex[j].mid_s - t_origin_s;
+      if (!path.Covers(dt)) continue;
+      const PixelPoint q = path.At(dt);
+      if (!Inside(o, q, 0.0)) continue;
+      const double tol = o.flow_tolerance_px + o.flow_tolerance_fraction * Dist(q, origin);
+      const PixelPoint v = path.VelocityAt(dt);
+      int count = 0, image = -1;
+      all.Near(q.x_px, q.y_px, tol, [&](int i) {
+        if (!c.usable[i] || (excluded && excluded(i)) || !Compatible(c, i, ex[j], v, flux_per_s)) return;
+        ++count, image = i;
+      });
+      if (count != 1) continue;
+      out.taken[t].push_back({j, image});
+      ++out.hits;
+    }
+  }
+  return out;
+}
+
+bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int dash,
+                  const std::function<bool(int)>& excluded, FlowStar* out) {
+  const TrailOptions& o = c.o;
+  const DetectedStar& d = c.images[dash];
+  if (d.length_px <= 0 || d.flux_dn <= 0 || (d.flags & kStarBlended)) return false;
+  const PixelPoint p = c.p[dash];
+  const PixelPoint v = flow.Velocity(p);
+  const double speed = std::hypot(v.x_px, v.y_px);
+  // Every star passing p moves so: the dash must be 20 s of that motion, along it.
+  const ShutterExposure* any_dash = nullptr;
+  for (const auto& ex : c.per_trail)
+    for (const ShutterExposure& e : ex)
+      if (e.kind == ExposureKind::kDash && !any_dash) any_dash = &e;
+  if (!any_dash || !Compatible(c, dash, *any_dash, v, 0.0)) return false;
+  if (10.0 * speed < 4.0 * o.flow_tolerance_px) return false;  // a slow star: wrong readings land on its images
+  const double flux_per_s = d.flux_dn / any_dash->duration_s;
+  double t_first = 1e300, t_last = -1e300;
+  for (const auto& ex : c.per_trail)
+    for (const ShutterExposure& e : ex) t_first = std::min(t_first, e.mid_s), t_last = std::max(t_last, e.mid_s);
+  const FlowPath path(flow, p, t_last - t_first, 30.0, [&](const PixelPoint& q) { return Inside(o, q, -50.0); });
+  const unsigned every_trail = (1u << c.per_trail.size()) - 1u;
+  // Evidence of a reading: the trail with the most images, and the dots of the next best trail. A wrong
+  // reading lines up one trail of the star (the trails' dot programs are shifted 30 s against each other)
+  // and at most 2 dots of any other (docs/trails.md, "The plate's flow": the schedule's own shifts), except
+  // the two readings 120 s off, which line up 8 dots of every trail (and so are always candidates).
+  struct Evidence {
+    int first = 0, second_images = 0, second_dots = 0;
+  };
+  auto evidence = [&](const FlowStar& s) {
+    Evidence ev;
+    int top = -1;
+    for (size_t t = 0; t < s.taken.size(); ++t)
+      if (top < 0 || s.taken[t].size() > s.taken[top].size()) top = static_cast<int>(t);
+    ev.first = static_cast<int>(s.taken[top].size());
+    for (size_t t = 0; t < s.taken.size(); ++t) {
+      if (static_cast<int>(t) == top) continue;
+      int dots = 0;
+      for (const auto& [j, i] : s.taken[t]) dots += c.per_trail[t][j].kind == ExposureKind::kDot;
+      if (dots > ev.second_dots || (dots == ev.second_dots && static_cast<int>(s.taken[t].size()) > ev.second_images))
+        ev.second_dots = dots, ev.second_images = static_cast<int>(s.taken[t].size());
+    }
+    return ev;
+  };
+  // Decoded: a trail of flow_min_images and a second one holding more dots than a wrong reading lines up.
+  // A candidate (another one makes the decision ambiguous): a trail of 5 and a second one with 3 dots.
+  constexpr int kSecondTrailDots = 4, kCandidateFirst = 5, kCandidateDots = 3, kOtherDashes = 2, kDurations = 4;
+  int readings = 0;
+  FlowStar best;
+  for (const auto& ex : c.per_trail)
+    for (const ShutterExposure& e : ex) {
+      if (e.kind != ExposureKind::kDash || !Compatible(c, dash, e, v, 0.0)) continue;
+      // First the reading's own trail (the exposures near the dash): a wrong reading finds little there,
+      // and most readings of most dashes stop here.
+      const unsigned own = 1u << (e.trail - 1);
+      if (CollectAlongFlow(c, all, path, p, e.mid_s, flux_per_s, own, excluded).hits < 3) continue;
+      FlowStar s = CollectAlongFlow(c, all, path, p, e.mid_s, flux_per_s, every_trail, excluded);
+      const Evidence ev = evidence(s);
+      // The dash itself must be taken as that exposure (alone within the tolerance).
+      bool self = false;
+      for (const auto& [j, i] : s.taken[e.trail - 1]) self |= i == dash && c.per_trail[e.trail - 1][j].mid_s == e.mid_s;
+      const bool candidate = ev.first >= kCandidateFirst && ev.second_dots >= kCandidateDots;
+      const bool decoded = self && ev.first >= o.flow_min_images && ev.second_dots >= kSecondTrailDots;
+      readings += candidate || decoded;
+      if (!decoded) continue;
+      // Dashes besides the seed: a seed merged with another image (twice its flux) reads the star's 1.2 s
+      // dots as 0.6 s ones, its 10 s dots as 6.2 s ones; its own dashes, half the flux expected then, are
+      // not taken.
+      int dashes = 0;
+      std::vector<double> durations;
+      for (size_t t = 0; t < s.taken.size(); ++t)
+        for (const auto& [j, i] : s.taken[t]) {
+          dashes += i != dash && c.per_trail[t][j].kind == ExposureKind::kDash;
+          durations.push_back(c.per_trail[t][j].duration_s);
+        }
+      if (dashes < kOtherDashes) continue;
+      // Images of at least four of the program's six exposure durations: a reading shifted within the trails
+      // maps the star's dots onto other groups, and the flux tolerance (a faint dot's sigma) lets some of
+      // those through (on the whole V <= 8 plate: 1.2 s dots read as 0.6 s ones, 10 s as 6.2 s), not all.
+      std::sort(durations.begin(), durations.end());
+      if (std::unique(durations.begin(), durations.end()) - durations.begin() < kDurations) continue;
+      best = std::move(s);
+    }
+  if (readings != 1 || best.hits == 0) return false;
+  *out = std::move(best);
+  return true;
+}
+
+}  // namespace platemeter::trail_internal

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <map>
 #include <numeric>
 #include <unordered_map>
 
@@ -862,7 +863,6 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     double t_first = 1e300, t_last = -1e300;
     for (const ShutterExposure& e : schedule) t_first = std::min(t_first, e.mid_s), t_last = std::max(t_last, e.mid_s);
     const auto excluded = [&](int i) { return result.images[i].chain >= 0; };
-    const unsigned every_trail = (1u << trails) - 1u;
     // Adds the trails of `star` holding enough images to the star of `root` (-1: a new star).
     auto add_star = [&](const trail_internal::FlowStar& star, double rate_px_per_s, int root) {
       for (int s = 0; s < trails; ++s) {
@@ -880,28 +880,33 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         parent[Root(parent, cid)] = r;
       }
     };
-    // Decoded stars' missing trails, from the middle of their longest trail.
-    std::unordered_map<int, int> longest;  // star root -> its trail with the most images
-    for (int k = 0; k < static_cast<int>(result.chains.size()); ++k) {
-      if (!decoded(k)) continue;
-      int& best = longest.try_emplace(Root(parent, k), k).first->second;
-      if (kept_of[k].size() > kept_of[best].size()) best = k;
-    }
-    std::vector<std::pair<int, int>> stars_to_complete(longest.begin(), longest.end());
-    std::sort(stars_to_complete.begin(), stars_to_complete.end());
-    for (const auto& [root, k] : stars_to_complete) {
-      const unsigned missing = every_trail & ~static_cast<unsigned>(numbers[Root(parent, root)]);
-      if (!missing) continue;
-      double t0 = 0, t1 = 0;
-      ends(k, &t0, &t1);
-      const double t_mid = 0.5 * (t0 + t1);
-      const PixelPoint origin = tracks[k].At(t_mid);
-      const FlowPath path(flow, origin, t_last - t_first, 30.0, [&](const PixelPoint& q) { return trail_internal::Inside(options, q, -50.0); });
-      const trail_internal::FlowStar star =
-          trail_internal::CollectAlongFlow(c, all, path, origin, t_mid, flux_of.at(k), missing, excluded);
-      const PixelPoint v = flow.Velocity(origin);
-      add_star(star, std::hypot(v.x_px, v.y_px), root);
-    }
+    // Decoded stars' missing trails, each from the end of the star's trail nearest to it in time (the flow's
+    // error grows with the distance carried).
+    auto complete_stars = [&] {
+      std::map<int, std::vector<int>> trails_of;  // star root -> its decoded trails
+      for (int k = 0; k < static_cast<int>(result.chains.size()); ++k)
+        if (decoded(k)) trails_of[Root(parent, k)].push_back(k);
+      for (const auto& [root, ks] : trails_of)
+        for (int s = 0; s < trails; ++s) {
+          if (numbers[Root(parent, root)] >> s & 1) continue;
+          int k = ks.front();
+          for (int q : ks) {
+            const int dq = std::abs(result.chains[q].trail - 1 - s), dk = std::abs(result.chains[k].trail - 1 - s);
+            if (dq < dk || (dq == dk && kept_of[q].size() > kept_of[k].size())) k = q;
+          }
+          double t0 = 0, t1 = 0;
+          ends(k, &t0, &t1);
+          const double t_end = s > result.chains[k].trail - 1 ? t1 : t0;
+          const PixelPoint origin = tracks[k].At(t_end);
+          const FlowPath path(flow, origin, t_last - t_first, 30.0,
+                              [&](const PixelPoint& q) { return trail_internal::Inside(options, q, -50.0); });
+          const trail_internal::FlowStar star =
+              trail_internal::CollectAlongFlow(c, all, path, origin, t_end, flux_of.at(k), 1u << s, excluded);
+          const PixelPoint v = flow.Velocity(origin);
+          add_star(star, std::hypot(v.x_px, v.y_px), root);
+        }
+    };
+    complete_stars();
     // Stars decoded from any of their dashes.
     std::vector<int> seeds;
     for (int i : dash_ids)
@@ -914,6 +919,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       const PixelPoint v = flow.Velocity(c.p[dash]);
       add_star(star, std::hypot(v.x_px, v.y_px), -1);
     }
+    complete_stars();  // the new stars' trails short of flow_min_images in their reading
   };
   if (options.grow_siblings) GrowSiblings();
   if (options.pattern_trails) {

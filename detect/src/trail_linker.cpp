@@ -41,6 +41,7 @@ bool TrailOptions::Check(std::string* why) const {
   if (!(sibling_tolerance_px > 0) || !(sibling_tolerance_fraction >= 0)) return fail("sibling_tolerance_px must be > 0");
   if (flow_degree < 1 || flow_degree > 10) return fail("flow_degree must lie in 1..10");
   if (!(flow_tolerance_px > 0) || !(flow_tolerance_fraction >= 0)) return fail("flow_tolerance_px must be > 0");
+  if (flow_min_images < 6 || flow_min_sibling_images < 6) return fail("flow_min_images must be >= 6");
   return true;
 }
 
@@ -865,12 +866,14 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     const auto excluded = [&](int i) { return result.images[i].chain >= 0; };
     // Adds the trails of `star` holding enough images to the star of `root` (-1: a new star).
     auto add_star = [&](const trail_internal::FlowStar& star, double rate_px_per_s, int root) {
+      // (a decoded star's missing trail: its timing is the star's, its images need only be many enough for the fit)
+      const int min_images = root >= 0 ? options.flow_min_sibling_images : options.flow_min_images;
       for (int s = 0; s < trails; ++s) {
-        if (static_cast<int>(star.taken[s].size()) < options.flow_min_images) continue;
+        if (static_cast<int>(star.taken[s].size()) < min_images) continue;
         if (root >= 0 && (numbers[Root(parent, root)] >> s & 1)) continue;
         const int cid = static_cast<int>(result.chains.size());
         // (the flow fixes its timing: no leading dashes needed)
-        if (!add_chain(s, star.taken[s], star.flux_per_s, rate_px_per_s, 0, options.flow_min_images)) continue;
+        if (!add_chain(s, star.taken[s], star.flux_per_s, rate_px_per_s, 0, min_images)) continue;
         if (root < 0) {
           root = cid;
           continue;

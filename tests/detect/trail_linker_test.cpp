@@ -43,6 +43,12 @@ TEST(TrailLinker, OptionsAreChecked) {
   TrailOptions o;
   o.match_tolerance = -1;
   EXPECT_THROW(LinkTrails({}, DutyCycleScheduleOptions{}, o), Error);
+  TrailOptions flow;
+  flow.flow_min_sibling_images = 5;  // the flow's trails need enough images for the sidereal fit
+  EXPECT_THROW(LinkTrails({}, DutyCycleScheduleOptions{}, flow), Error);
+  flow = TrailOptions{};
+  flow.flow_tolerance_px = 0;
+  EXPECT_THROW(LinkTrails({}, DutyCycleScheduleOptions{}, flow), Error);
   EXPECT_TRUE(LinkTrails({}, DutyCycleScheduleOptions{}).images.empty());
 }
 

@@ -192,6 +192,11 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  FILE* lost_out = lost_file.empty() ? nullptr : std::fopen(lost_file.c_str(), "w");  // before the long run
+  if (!lost_file.empty() && !lost_out) {
+    std::fprintf(stderr, "bench_trails: cannot write %s\n", lost_file.c_str());
+    return 2;
+  }
   if (!fs::exists(calib::DefaultStarCatalogPath())) {
     std::fprintf(stderr, "bench_trails: %s is missing (scripts/setup installs kstars-data)\n",
                  calib::DefaultStarCatalogPath().c_str());
@@ -426,7 +431,6 @@ int main(int argc, char** argv) {
       }
     const TruthIndex found_index(at, 4.0);
     std::map<std::string, long> lost;
-    FILE* lost_out = lost_file.empty() ? nullptr : std::fopen(lost_file.c_str(), "w");
     std::set<int> lost_stars;
     for (const TruthImage& t : truth_images) {
       if (!counted(t) || right.count(&t)) continue;
@@ -440,8 +444,11 @@ int main(int argc, char** argv) {
       }
       why += trails_right.count({t.star, t.trail}) ? " (trail partly right)" : stars_right.count(t.star) ? " (another trail of the star right)" : " (nothing of the star right)";
       ++lost[why];
-      if (lost_out) std::fprintf(lost_out, "dot %s T%d %d %.3f %.3f %s\n", star_names[t.star].c_str(), t.trail, t.index, t.x_px, t.y_px, why.c_str());
-      if (lost_out) lost_stars.insert(t.star);
+      if (lost_out) {
+        std::fprintf(lost_out, "dot %s T%d %d %.3f %.3f %s\n", star_names[t.star].c_str(), t.trail, t.index, t.x_px,
+                     t.y_px, why.c_str());
+        lost_stars.insert(t.star);
+      }
     }
     if (lost_out) {
       for (const TruthImage& t : truth_images)

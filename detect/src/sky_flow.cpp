@@ -42,7 +42,7 @@ bool SkyFlow::Fit(const std::vector<PixelPoint>& p, const std::vector<PixelPoint
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(am);
     if (qr.rank() < terms) return false;
     ax_ = qr.solve(bx), ay_ = qr.solve(by);
-    // Robust spread of the residuals over all samples (median |r| / 0.6745 per axis, both axes pooled).
+    // Robust spread of the residuals over all samples (per axis, from the median length of the 2D residual).
     std::vector<double> r(n), sorted;
     for (int i = 0; i < n; ++i) {
       const Eigen::VectorXd b = a.row(i).transpose();
@@ -112,10 +112,17 @@ FlowPath::FlowPath(const SkyFlow& flow, const PixelPoint& p, double span_s, doub
   from_s_ = (first - half) * step_s, to_s_ = (last - half) * step_s;
 }
 
-PixelPoint FlowPath::At(double dt_s) const {
+size_t FlowPath::Interval(double dt_s, double* s) const {
   const double f = std::clamp((dt_s + span_s_) / step_s_, 0.0, static_cast<double>(p_.size() - 1));
   const size_t k = std::min(static_cast<size_t>(f), p_.size() - 2);
-  const double s = f - k, h = step_s_;
+  *s = f - k;
+  return k;
+}
+
+PixelPoint FlowPath::At(double dt_s) const {
+  double s = 0;
+  const size_t k = Interval(dt_s, &s);
+  const double h = step_s_;
   // Cubic Hermite on [k, k + 1] with the flow's velocities as the end slopes.
   const double h00 = 2 * s * s * s - 3 * s * s + 1, h10 = s * s * s - 2 * s * s + s, h01 = -2 * s * s * s + 3 * s * s,
                h11 = s * s * s - s * s;
@@ -124,9 +131,9 @@ PixelPoint FlowPath::At(double dt_s) const {
 }
 
 PixelPoint FlowPath::VelocityAt(double dt_s) const {
-  const double f = std::clamp((dt_s + span_s_) / step_s_, 0.0, static_cast<double>(p_.size() - 1));
-  const size_t k = std::min(static_cast<size_t>(f), p_.size() - 2);
-  const double s = f - k, h = step_s_;
+  double s = 0;
+  const size_t k = Interval(dt_s, &s);
+  const double h = step_s_;
   // The Hermite cubic's derivative (d/ds divided by h).
   const double d00 = 6 * s * s - 6 * s, d10 = 3 * s * s - 4 * s + 1, d01 = -6 * s * s + 6 * s, d11 = 3 * s * s - 2 * s;
   return {(d00 * p_[k].x_px + d01 * p_[k + 1].x_px) / h + d10 * v_[k].x_px + d11 * v_[k + 1].x_px,

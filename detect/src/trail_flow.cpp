@@ -23,6 +23,13 @@ void AddFlowSamples(const Track& track, const std::vector<double>& t_s, std::vec
   }
 }
 
+FlowPath PlatePath(const Context& c, const SkyFlow& flow, const PixelPoint& p) {
+  double t_first_s = 1e300, t_last_s = -1e300;
+  for (const auto& ex : c.per_trail)
+    for (const ShutterExposure& e : ex) t_first_s = std::min(t_first_s, e.mid_s), t_last_s = std::max(t_last_s, e.mid_s);
+  return FlowPath(flow, p, t_last_s - t_first_s, 30.0, [&](const PixelPoint& q) { return Inside(c.o, q, -50.0); });
+}
+
 FlowStar CollectAlongFlow(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& origin,
                           double t_origin_s, double flux_per_s, unsigned trail_mask,
                           const std::function<bool(int)>& excluded) {
@@ -69,10 +76,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   if (!any_dash || !Compatible(c, dash, *any_dash, v, 0.0)) return false;
   if (10.0 * speed < 4.0 * o.flow_tolerance_px) return false;  // a slow star: wrong readings land on its images
   const double flux_per_s = d.flux_dn / any_dash->duration_s;
-  double t_first = 1e300, t_last = -1e300;
-  for (const auto& ex : c.per_trail)
-    for (const ShutterExposure& e : ex) t_first = std::min(t_first, e.mid_s), t_last = std::max(t_last, e.mid_s);
-  const FlowPath path(flow, p, t_last - t_first, 30.0, [&](const PixelPoint& q) { return Inside(o, q, -50.0); });
+  const FlowPath path = PlatePath(c, flow, p);
   const unsigned every_trail = (1u << c.per_trail.size()) - 1u;
   // Evidence of a reading: the trail with the most images, and the dots of the next best trail. A wrong
   // reading lines up one trail of the star (the trails' dot programs are shifted 30 s against each other)

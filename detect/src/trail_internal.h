@@ -203,6 +203,9 @@ int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, 
 void AddFlowSamples(const Track& track, const std::vector<double>& t_s, std::vector<PixelPoint>* p,
                     std::vector<PixelPoint>* velocity_px_per_s);
 
+// The path through p over the whole plate's time span (either way), ending 50 px outside the scan and format.
+FlowPath PlatePath(const Context& c, const SkyFlow& flow, const PixelPoint& p);
+
 // The images of one star found along its flow path, per trail (0-based): (exposure in the trail, image).
 struct FlowStar {
   std::vector<std::vector<std::pair<int, int>>> taken;

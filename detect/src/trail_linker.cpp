@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <map>
+#include <numbers>
 #include <numeric>
 #include <unordered_map>
 
@@ -861,8 +861,6 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     for (int degree = options.flow_degree; degree >= 2 && !flow.ok(); --degree)
       if (sampled_trails >= (degree + 1) * (degree + 2) / 2) flow.Fit(samples_p, samples_v, degree);
     if (!flow.ok()) return;
-    double t_first = 1e300, t_last = -1e300;
-    for (const ShutterExposure& e : schedule) t_first = std::min(t_first, e.mid_s), t_last = std::max(t_last, e.mid_s);
     const auto excluded = [&](int i) { return result.images[i].chain >= 0; };
     // Adds the trails of `star` holding enough images to the star of `root` (-1: a new star).
     auto add_star = [&](const trail_internal::FlowStar& star, double rate_px_per_s, int root) {
@@ -901,10 +899,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           ends(k, &t0, &t1);
           const double t_end = s > result.chains[k].trail - 1 ? t1 : t0;
           const PixelPoint origin = tracks[k].At(t_end);
-          const FlowPath path(flow, origin, t_last - t_first, 30.0,
-                              [&](const PixelPoint& q) { return trail_internal::Inside(options, q, -50.0); });
-          const trail_internal::FlowStar star =
-              trail_internal::CollectAlongFlow(c, all, path, origin, t_end, flux_of.at(k), 1u << s, excluded);
+          const trail_internal::FlowStar star = trail_internal::CollectAlongFlow(
+              c, all, trail_internal::PlatePath(c, flow, origin), origin, t_end, flux_of.at(k), 1u << s, excluded);
           const PixelPoint v = flow.Velocity(origin);
           add_star(star, std::hypot(v.x_px, v.y_px), root);
         }

@@ -105,12 +105,6 @@ TEST(SkyFlow, CarriesAStarsImageToEveryOtherExposureOfThePlate) {
   EXPECT_GT(four.max_px, 2 * six.max_px);
 }
 
-}  // namespace
-}  // namespace platemeter
-
-namespace platemeter {
-namespace {
-
 // What the flow decoder (detect/src/trail_flow.cpp) relies on, from the schedule alone: a dash read as
 // another dash exposure shifts the whole program in time; the shifted program lines up many images of
 // one trail (a trail read as its neighbour) but few dots of a second trail, because the trails' different

@@ -54,10 +54,10 @@ class FlowPath {
            const std::function<bool(const PixelPoint&)>& inside = {});
   PixelPoint At(double dt_s) const;
   PixelPoint VelocityAt(double dt_s) const;
-  double span_s() const { return span_s_; }
   bool Covers(double dt_s) const { return dt_s >= from_s_ && dt_s <= to_s_; }
 
  private:
+  size_t Interval(double dt_s, double* fraction) const;  // the sample interval holding dt_s, and where in it
   double span_s_, step_s_, from_s_ = 0.0, to_s_ = 0.0;
   std::vector<PixelPoint> p_, v_;  // at -span_s + k step_s
 };

@@ -298,6 +298,11 @@ int main(int argc, char** argv) {
     }
   }
   auto whole = [&](const TruthImage& t) { return t.dot && trail_inside[{t.star, t.trail}]; };
+  // Complete trails: every dash and dot exposed on the format (a trail entering it after its leading run has
+  // no number of its own; only its siblings can tell it). Table 1 defaults: trail t has t + 1 leading dashes.
+  std::map<std::pair<int, int>, int> images_of_trail;
+  for (const TruthImage& t : truth_images) ++images_of_trail[{t.star, t.trail}];
+  auto complete = [&](const TruthImage& t) { return images_of_trail[{t.star, t.trail}] == 25 + (t.trail + 1) + 4; };
   auto counted = [&](const TruthImage& t) { return whole(t) && t.snr >= min_snr && t.isolated; };
   long whole_dots = 0, counted_dots = 0;
   for (const TruthImage& t : truth_images) {
@@ -473,6 +478,31 @@ int main(int argc, char** argv) {
     }
     if (b + 2 < 6) std::printf("  SNR %3.0f-%-3.0f: %6ld dots, %6.2f %% right\n", edges[b], edges[b + 1], n, 100.0 * ok / std::max(1L, n));
     else std::printf("  SNR %3.0f+   : %6ld dots, %6.2f %% right\n", edges[b], n, 100.0 * ok / std::max(1L, n));
+  }
+  {
+    long n = 0, ok = 0;
+    for (const TruthImage& t : truth_images)
+      if (counted(t) && complete(t)) ++n, ok += right.count(&t) > 0;
+    std::printf("  of complete trails (every dash and dot on the format): %ld of %ld right = %.2f %%\n", ok, n,
+                pct(ok, n));
+  }
+  // Measurable dots by the star's speed (its 20 s dash's length): slow stars near the pole merge their dashes.
+  {
+    std::map<int, double> dash_px_of_star;
+    for (const TruthImage& t : truth_images)
+      if (!t.dot) dash_px_of_star[t.star] = t.length_px;
+    const double dash_edges_px[] = {0, 3, 6, 9, 12, 1e300};
+    for (int b = 0; b + 1 < 6; ++b) {
+      long n = 0, ok = 0;
+      for (const TruthImage& t : truth_images) {
+        const double dash_px = dash_px_of_star[t.star];
+        if (!counted(t) || dash_px < dash_edges_px[b] || dash_px >= dash_edges_px[b + 1]) continue;
+        ++n;
+        ok += right.count(&t) > 0;
+      }
+      std::printf("  dash %2.0f-%-3.0f px: %6ld measurable dots, %6.2f %% right\n", dash_edges_px[b],
+                  std::min(99.0, dash_edges_px[b + 1]), n, pct(ok, n));
+    }
   }
   if (n_err > 0)
     std::printf("right dots' position error: RMS %.4f px per axis, RMS(error / sigma) %.2f\n",

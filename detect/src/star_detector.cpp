@@ -207,7 +207,9 @@ void MeasureSegment(const SweepMoments& m, const std::vector<FitPixel>& pixels, 
   }
   if (g.length_px > (1.0 + o.dash_length_tolerance) * o.max_dash_length_px + o.psf_fwhm_px) {
     DetectedStar line = Defect(g.x_px, g.y_px, "line");
-    line.length_px = g.length_px;  // its extent: a trail linker asks what it may hide
+    // Its extent (a trail linker asks what it may hide), at most the fit window's: a fit of a component
+    // unlike a segment may run its length away (88636 px seen on a 6012 px scan).
+    line.length_px = std::min(g.length_px, std::hypot(window.x1 - window.x0, window.y1 - window.y0));
     line.angle_deg = g.angle_rad * 180.0 / std::numbers::pi;
     result->push_back(line);
     return;

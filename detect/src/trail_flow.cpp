@@ -11,6 +11,10 @@
 
 namespace platemeter::trail_internal {
 
+namespace {
+constexpr double kNotDecodedTolerances = 2.5, kSlowTolerances = 4.0;  // DecodeByFlow's slow stars, below
+}  // namespace
+
 void AddFlowSamples(const Track& track, const std::vector<double>& t_s, std::vector<PixelPoint>* p,
                     std::vector<PixelPoint>* velocity_px_per_s) {
   if (t_s.empty()) return;
@@ -74,7 +78,12 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
     for (const ShutterExposure& e : ex)
       if (e.kind == ExposureKind::kDash && !any_dash) any_dash = &e;
   if (!any_dash || !Compatible(c, dash, *any_dash, v, 0.0)) return false;
-  if (10.0 * speed < 4.0 * o.flow_tolerance_px) return false;  // a slow star: wrong readings land on its images
+  // A slow star (10 s of motion, the shift between some readings, within a few flow tolerances): a wrong
+  // reading lands near its own images. Under 2.5 tolerances it is not decoded; under 4 it must show more
+  // (a trail of 12, 8 dots of a second trail, 5 durations: with the usual evidence the whole V <= 8 plate had
+  // 19 wrong tags, a lone trail read under another number with 4 chance dots of a "second trail").
+  if (10.0 * speed < kNotDecodedTolerances * o.flow_tolerance_px) return false;
+  const bool slow = 10.0 * speed < kSlowTolerances * o.flow_tolerance_px;
   const double flux_per_s = d.flux_dn / any_dash->duration_s;
   const FlowPath path = PlatePath(c, flow, p);
   const unsigned every_trail = (1u << c.per_trail.size()) - 1u;
@@ -103,6 +112,10 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   // Decoded: a trail of flow_min_images and a second one holding more dots than a wrong reading lines up.
   // A candidate (another one makes the decision ambiguous): a trail of 5 and a second one with 3 dots.
   constexpr int kSecondTrailDots = 4, kCandidateFirst = 5, kCandidateDots = 3, kOtherDashes = 2, kDurations = 4;
+  constexpr int kSlowFirst = 12, kSlowSecondTrailDots = 8, kSlowDurations = 5;
+  const int need_first = slow ? std::max(kSlowFirst, o.flow_min_images) : o.flow_min_images;
+  const int need_second_dots = slow ? kSlowSecondTrailDots : kSecondTrailDots;
+  const int need_durations = slow ? kSlowDurations : kDurations;
   int readings = 0;
   FlowStar best;
   for (const auto& ex : c.per_trail)
@@ -118,7 +131,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       bool self = false;
       for (const auto& [j, i] : s.taken[e.trail - 1]) self |= i == dash && c.per_trail[e.trail - 1][j].mid_s == e.mid_s;
       const bool candidate = ev.first >= kCandidateFirst && ev.second_dots >= kCandidateDots;
-      const bool decoded = self && ev.first >= o.flow_min_images && ev.second_dots >= kSecondTrailDots;
+      const bool decoded = self && ev.first >= need_first && ev.second_dots >= need_second_dots;
       readings += candidate || decoded;
       if (!decoded) continue;
       // Dashes besides the seed: a seed merged with another image (twice its flux) reads the star's 1.2 s
@@ -136,7 +149,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       // maps the star's dots onto other groups, and the flux tolerance (a faint dot's sigma) lets some of
       // those through (on the whole V <= 8 plate: 1.2 s dots read as 0.6 s ones, 10 s as 6.2 s), not all.
       std::sort(durations.begin(), durations.end());
-      if (std::unique(durations.begin(), durations.end()) - durations.begin() < kDurations) continue;
+      if (std::unique(durations.begin(), durations.end()) - durations.begin() < need_durations) continue;
       best = std::move(s);
     }
   if (readings != 1 || best.hits == 0) return false;

@@ -223,8 +223,29 @@ FlowStar CollectAlongFlow(const Context& c, const Grid& all, const FlowPath& pat
 // the plate (its length must be 20 s of the flow's motion there, along it). Exactly one reading may line up
 // a trail of 5 images and 3 dots of another, and it must be decoded: the dash taken as that exposure, a
 // trail of flow_min_images, 4 dots of a second trail, 2 other dashes and images of 4 of the 6 exposure
-// durations (trail_flow.cpp says why). A slow star (10 s of motion within four tolerances) is not decoded.
+// durations (trail_flow.cpp says why). A slow star (10 s of motion within 2.5 tolerances) is not decoded;
+// within 4 it needs a trail of 12, 8 dots of a second trail and 5 durations.
 bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int dash,
                   const std::function<bool(int)>& excluded, FlowStar* out);
+
+// A lone trail (trail_lone.cpp): a star whose other trails are off the format or hidden, numbered by its
+// leading run found along the flow.
+struct LoneTrail {
+  int trail = -1;                          // 0-based trail number
+  std::vector<std::pair<int, int>> taken;  // (exposure in the trail, image), the run first
+  double flux_per_s = 0.0;
+};
+// The unassigned dash (a blend too) read as every dash exposure; the readings grouped by the dash's time from
+// the trail's first dot (a group predicts the same images past the run). Exactly one group may line up 5
+// images past the run, no reading of another group 3 dots of a second trail. Its run, counted back from its
+// last dash along the flow: at each place one detection explaining k dashes (single, or merged through their
+// gaps: at their centre, (30 k - 10) s of motion long, k dashes' flux; exactly one k), up to a place inside
+// the format where nothing may hold a dash (within half a dash and two FWHM: no image but one fainter than
+// half a dash, or one taken by another star whose flux tolerance could not have let a swallowed dash
+// through; no rejected line). That count must be a trail's and the star's other trails must not prefer
+// another number; then flow_min_images images, 2 dashes besides the seed, 4 exposure durations. A slow star
+// (10 s of motion within 2 tolerances) is not decoded.
+bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int dash,
+                     const std::function<bool(int)>& excluded, LoneTrail* out);
 
 }  // namespace platemeter::trail_internal

@@ -918,6 +918,16 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       const PixelPoint v = flow.Velocity(c.p[dash]);
       add_star(star, std::hypot(v.x_px, v.y_px), -1);
     }
+    // Lone trails: stars the loop above left undecided, numbered by their runs (nothing else confirms the
+    // number: not with require_joined).
+    if (options.flow_lone_trails && !options.require_joined)
+      for (int dash : seeds) {
+        if (result.images[dash].chain >= 0) continue;
+        trail_internal::LoneTrail lone;
+        if (!trail_internal::DecodeLoneTrail(c, all, flow, dash, excluded, &lone)) continue;
+        const PixelPoint v = flow.Velocity(c.p[dash]);
+        add_chain(lone.trail, lone.taken, lone.flux_per_s, std::hypot(v.x_px, v.y_px), 0, options.flow_min_images);
+      }
     complete_stars();  // the new stars' trails short of flow_min_images in their reading
   };
   if (options.grow_siblings) GrowSiblings();

@@ -12,7 +12,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <functional>
 #include <memory>
 #include <map>
 #include <numbers>
@@ -229,6 +228,41 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   std::printf("[crowded, without the flow] %ld tagged right, %ld wrong\n", no_flow_score.right, no_flow_score.wrong);
   EXPECT_EQ(no_flow_score.wrong, 0);
   EXPECT_LT(no_flow_score.right, score.right);
+  // Without the lone trails numbered by their runs along the flow (docs/trails.md, "The plate's flow" 4):
+  // fewer; with them no wrong tag (above).
+  TrailOptions no_lone = field->options;
+  no_lone.flow_lone_trails = false;
+  const Score no_lone_score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, no_lone), false);
+  std::printf("[crowded, without lone trails] %ld tagged right, %ld wrong\n", no_lone_score.right, no_lone_score.wrong);
+  EXPECT_EQ(no_lone_score.wrong, 0);
+  EXPECT_LT(no_lone_score.right, score.right);
+}
+
+// Stars with a single trail on the plate (as where the others leave the format): no sibling can number it,
+// only its own run. The runs a crowd hides from the run linker are found along the plate's flow
+// (docs/trails.md, "The plate's flow" 4): more trails decoded, none wrongly.
+TEST(TrailCrowded, LoneTrailsAreNumberedByTheirRunsAlongTheFlow) {
+  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
+    GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
+  const auto field = BuildField(FieldSpec(7.0), [](const MeasuredPoint& t) {
+    unsigned h = 0;  // the star's one trail, from its id
+    for (char ch : t.star_id) h = 31 * h + static_cast<unsigned char>(ch);
+    return t.trail == "T" + std::to_string(1 + h % 4);
+  });
+  // Without the separator seeds: in a field of lone trails only, their numbering by a grown sibling finds
+  // chance "siblings" among other stars' images (38 wrong tags here, one star; none on the simulated plates).
+  TrailOptions options = field->options;
+  options.pattern_trails = false;
+  const Score score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, options), true);
+  TrailOptions no_lone = options;
+  no_lone.flow_lone_trails = false;
+  const Score before = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, no_lone), false);
+  std::printf("[lone trails] %ld unmerged dots of whole trails, %ld tagged right, %ld wrong (without lone trails: %ld, %ld)\n",
+              score.clean_dots, score.right, score.wrong, before.right, before.wrong);
+  EXPECT_EQ(score.wrong, 0);
+  EXPECT_EQ(before.wrong, 0);
+  EXPECT_GT(score.clean_dots, 1000);
+  EXPECT_GT(score.right, before.right + score.clean_dots / 20);  // figures in docs/trails.md
 }
 
 // Trails whose leading runs are wholly lost (merged into crossing images, or under dust) are still

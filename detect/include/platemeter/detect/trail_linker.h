@@ -125,6 +125,8 @@ struct TrailOptions {
   double flow_tolerance_fraction = 2e-4;  // this fraction of its distance from the image it was predicted from
   int flow_min_images = 8;             // images a trail found along the flow must hold (a new star: two such trails)
   int flow_min_sibling_images = 6;     // images a decoded star's missing trail found along the flow must hold
+  bool flow_lone_trails = true;        // a star with one trail on the format numbered by its run found along the
+                                       // flow (not with require_joined: nothing else confirms the number)
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
   // beyond it (trail 3 minus one dash looks like a complete trail 2): the position one dash before
   // the run must lie inside by edge_margin_px, else the run is refused. Unset (max <= min):

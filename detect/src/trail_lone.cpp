@@ -1,0 +1,197 @@
+// A lone trail numbered by its leading run found along the plate's flow (trail_internal.h; docs/trails.md
+// "The plate's flow", step 4). A star with one trail on the format (the others off it, or hidden) cannot be
+// decoded by its sibling trails. Its dot program fixes the time of every image relative to a dash, but not
+// the trail's number: the four trails' programs after their leading runs are alike. The run tells: under
+// the flow, the positions of the run's dashes are known to a fraction of a pixel, so the dashes present
+// there are counted (single, or merged through their 10 s gaps into one detection whose centre, length and
+// flux say how many) and the place one dash before them must be empty.
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "trail_internal.h"
+
+namespace platemeter::trail_internal {
+
+namespace {
+
+// Index of the trail's first dot (= its leading dash count).
+int FirstDot(const std::vector<ShutterExposure>& ex) {
+  int j = 0;
+  while (j < static_cast<int>(ex.size()) && ex[j].kind != ExposureKind::kDot) ++j;
+  return j;
+}
+
+// A reading lining up this many dots of another trail makes the star DecodeByFlow's (which left it undecided).
+constexpr int kOtherTrailDots = 3;
+// A group of readings with this many images past the run is a candidate; exactly one may exist.
+constexpr int kCandidateImages = 5;
+// As in DecodeByFlow: dashes besides the seed, and exposure durations among the images (a reading shifted by
+// a dot group maps the dots onto other durations; the flux tolerance lets some of them through, not all).
+constexpr int kOtherDashes = 2, kDurations = 4;
+// A slow star (10 s of motion within this many flow tolerances) is not decoded: readings shifted by 10 s land
+// on its own images. (Its run may merge: the merged explanation below counts it.)
+constexpr double kSlowTolerances = 2.0;
+
+}  // namespace
+
+bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int dash,
+                     const std::function<bool(int)>& excluded, LoneTrail* out) {
+  const TrailOptions& o = c.o;
+  const DetectedStar& d = c.images[dash];
+  const PixelPoint p = c.p[dash];
+  // (a blended seed too: a dash fitted jointly with the dot on its wing; one merged with another image reads
+  // the star's flux wrong, and the durations below refuse it)
+  if (d.length_px <= 0 || d.flux_dn <= 0) return false;
+  const PixelPoint v = flow.Velocity(p);
+  const double speed = std::hypot(v.x_px, v.y_px);
+  const ShutterExposure& a_dash = c.per_trail.front().front();  // a leading dash: every dash lasts 20 s
+  if (!Compatible(c, dash, a_dash, v, 0.0)) return false;
+  if (10.0 * speed < kSlowTolerances * o.flow_tolerance_px) return false;
+  const double flux_per_s = d.flux_dn / a_dash.duration_s;
+  const FlowPath path = PlatePath(c, flow, p);
+  const unsigned every_trail = (1u << c.per_trail.size()) - 1u;
+
+  // Readings of the dash grouped by its time from the trail's first dot: readings in one group predict the
+  // same dots and separators (the programs after the runs are alike, the flow autonomous) and differ only in
+  // their leading dashes.
+  struct Group {
+    int trail = -1, exposure = -1;                // a reading of the group (trail, exposure)
+    std::vector<std::pair<int, int>> program;     // (exposure, image) past the run, in that reading's trail
+    bool self = false;                            // the dash taken as the reading's exposure
+    std::map<int, int> sibling_dots;              // per reading's trail: the most dots of another trail
+  };
+  std::map<long, Group> groups;  // key: the dash's time from the first dot, 0.1 s
+  for (size_t t = 0; t < c.per_trail.size(); ++t) {
+    const std::vector<ShutterExposure>& ex = c.per_trail[t];
+    const int first_dot = FirstDot(ex);
+    for (int j = 0; j < static_cast<int>(ex.size()); ++j) {
+      const ShutterExposure& e = ex[j];
+      if (e.kind != ExposureKind::kDash || !Compatible(c, dash, e, v, 0.0)) continue;
+      const FlowStar own = CollectAlongFlow(c, all, path, p, e.mid_s, flux_per_s, 1u << t, excluded);
+      if (own.hits < 3) continue;
+      // Dots of the star's other trails under this reading: only the right trail number lines them up.
+      const FlowStar whole = CollectAlongFlow(c, all, path, p, e.mid_s, flux_per_s, every_trail & ~(1u << t), excluded);
+      int sibling_dots = 0;
+      for (size_t u = 0; u < whole.taken.size(); ++u) {
+        int dots = 0;
+        for (const auto& [k, i] : whole.taken[u]) dots += c.per_trail[u][k].kind == ExposureKind::kDot;
+        sibling_dots = std::max(sibling_dots, dots);
+      }
+      const long key = std::lround(10.0 * (e.mid_s - ex[first_dot].mid_s));
+      Group& g = groups[key];
+      g.sibling_dots[static_cast<int>(t)] = std::max(g.sibling_dots[static_cast<int>(t)], sibling_dots);
+      if (g.trail >= 0) continue;  // the group's program is known from its first reading
+      g.trail = static_cast<int>(t), g.exposure = j;
+      for (const auto& [k, i] : own.taken[t]) {
+        if (k < first_dot) continue;
+        g.program.push_back({k, i});
+        g.self |= i == dash && k == j;
+      }
+    }
+  }
+  // Exactly one group with the images of a candidate.
+  const Group* best = nullptr;
+  for (const auto& [key, g] : groups) {
+    if (static_cast<int>(g.program.size()) < kCandidateImages) continue;
+    if (best) return false;
+    best = &g;
+  }
+  if (!best) return false;
+  // Another group lining up dots of a second trail: the star is no lone trail (DecodeByFlow left it undecided).
+  for (const auto& [key, g] : groups)
+    for (const auto& [t, dots] : g.sibling_dots)
+      if (&g != best && dots >= kOtherTrailDots) return false;
+  // The run, counted back from its last dash along the flow: dash m (0 = the last) lies 30 m s before it.
+  const std::vector<ShutterExposure>& ex = c.per_trail[best->trail];
+  const int first_dot = FirstDot(ex);
+  const double last_dash_s = ex[first_dot - 1].mid_s - ex[best->exposure].mid_s;  // from the seed
+  int max_dashes = 0;
+  for (const auto& e : c.per_trail) max_dashes = std::max(max_dashes, FirstDot(e));
+  // Each step explains dashes m .. m + k - 1 by one detection: a single dash (k = 1) or k dashes merged
+  // through their 10 s gaps (their centre, (30 k - 10) s of motion long, k dashes' flux); exactly one k.
+  std::vector<int> single(max_dashes + 1, -1);  // the image of dash m, alone
+  std::vector<int> run;                         // the run's detections
+  const double dash_flux = a_dash.duration_s * flux_per_s, dash_length = a_dash.duration_s * speed;
+  int m = 0;
+  for (;;) {
+    if (m > max_dashes) return false;
+    int found_k = 0, found = -1, explanations = 0;
+    for (int k = 1; m + k <= max_dashes + 1; ++k) {
+      const double dt_first = last_dash_s - 30.0 * (m + k - 1);
+      if (!path.Covers(dt_first)) return false;
+      if (!Inside(o, path.At(dt_first), o.edge_margin_px)) return false;  // it may go on beyond the format
+      const double dt = last_dash_s - 30.0 * (m + 0.5 * (k - 1));
+      const PixelPoint q = path.At(dt), vq = path.VelocityAt(dt);
+      const double tol = o.flow_tolerance_px + o.flow_tolerance_fraction * Dist(q, p);
+      ShutterExposure merged = a_dash;
+      merged.duration_s = a_dash.duration_s + 30.0 * (k - 1);  // the swept length
+      const double merged_flux_per_s = flux_per_s * k * a_dash.duration_s / merged.duration_s;
+      int count = 0, image = -1;
+      all.Near(q.x_px, q.y_px, tol, [&](int i) {
+        if (!c.usable[i] || (excluded && excluded(i)) || !Compatible(c, i, merged, vq, merged_flux_per_s)) return;
+        ++count, image = i;
+      });
+      if (count > 1) return false;
+      if (count == 1) ++explanations, found_k = k, found = image;
+    }
+    if (explanations > 1) return false;
+    if (explanations == 1) {
+      if (found_k == 1) single[m] = found;
+      run.push_back(found);
+      m += found_k;
+      continue;
+    }
+    // Dash m absent: nothing may hold it. The flow puts it within its tolerance; a detection holding it
+    // (merged with another image: at least its flux; the bigger piece of a split: half of it; or a rejected
+    // line reaching there) lies within half its length and two FWHM of that.
+    const PixelPoint q = path.At(last_dash_s - 30.0 * m);
+    const double reach_px = 0.5 * dash_length + 2.0 * o.psf_fwhm_px + o.flow_tolerance_px;
+    bool empty = true;
+    ForReaching(c, all, q, reach_px, [&](int i) {
+      const DetectedStar& h = c.images[i];
+      // Another star's image, taken with that star's flux: had it swallowed this dash, its flux would exceed
+      // that star's by the dash's, which the flux tolerance lets through only when dash_flux <= (tolerance x
+      // its flux + 4 sigma) / (1 + tolerance).
+      const bool explained = excluded && excluded(i) && h.flux_dn > 0 &&
+                             dash_flux > (o.flux_tolerance * h.flux_dn + 4.0 * h.sigma_flux_dn) / (1.0 + o.flux_tolerance);
+      const bool faint = h.flux_dn > 0 && h.flux_dn < 0.5 * dash_flux;
+      if (!faint && !explained && std::find(run.begin(), run.end(), i) == run.end()) empty = false;
+    });
+    if (!empty) return false;
+    break;
+  }
+  // The run's length must be a trail's.
+  const int n = m;
+  int trail = -1;
+  for (size_t t = 0; t < c.per_trail.size(); ++t)
+    if (FirstDot(c.per_trail[t]) == n) trail = static_cast<int>(t);
+  if (trail < 0) return false;
+  // The star's other trails must not say another number.
+  const auto own = best->sibling_dots.find(trail);
+  const int own_dots = own == best->sibling_dots.end() ? 0 : own->second;
+  for (const auto& [t, dots] : best->sibling_dots)
+    if (t != trail && dots >= kOtherTrailDots && dots >= own_dots) return false;
+  // The seed must be taken: as a dash of the run or in the program.
+  if (!best->self && std::find(single.begin(), single.end(), dash) == single.end()) return false;
+
+  // The trail under its number: the run's dashes then the program past it.
+  out->trail = trail;
+  out->flux_per_s = flux_per_s;
+  out->taken.clear();
+  for (int k = n - 1; k >= 0; --k)
+    if (single[k] >= 0) out->taken.push_back({n - 1 - k, single[k]});  // merged dashes are not tagged
+  const int shift = n - first_dot;
+  for (const auto& [k, i] : best->program) out->taken.push_back({k + shift, i});
+  std::vector<double> durations;
+  int dashes = 0;
+  for (const auto& [k, i] : out->taken) {
+    durations.push_back(c.per_trail[trail][k].duration_s);
+    dashes += i != dash && c.per_trail[trail][k].kind == ExposureKind::kDash;
+  }
+  std::sort(durations.begin(), durations.end());
+  const long distinct = std::unique(durations.begin(), durations.end()) - durations.begin();
+  return static_cast<int>(out->taken.size()) >= o.flow_min_images && dashes >= kOtherDashes && distinct >= kDurations;
+}
+
+}  // namespace platemeter::trail_internal

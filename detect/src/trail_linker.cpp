@@ -862,6 +862,48 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       if (sampled_trails >= (degree + 1) * (degree + 2) / 2) flow.Fit(samples_p, samples_v, degree);
     if (!flow.ok()) return;
     const auto excluded = [&](int i) { return result.images[i].chain >= 0; };
+    // A star's trails lie on one flow path: each trail's images carried along the flow from the end of the
+    // star's largest trail nearest in time must mostly land within the flow's tolerance. A trail that does
+    // not (a "sibling" grown from other stars' images, which the parabola's wider tolerance let through) is
+    // not the star's: with two trails both go (which one is wrong is unknown), with more the strays.
+    auto check_joins = [&] {
+      std::map<int, std::vector<int>> trails_of;  // star root -> its decoded trails
+      for (int k = 0; k < static_cast<int>(result.chains.size()); ++k)
+        if (decoded(k)) trails_of[Root(parent, k)].push_back(k);
+      for (const auto& [root, ks] : trails_of) {
+        if (ks.size() < 2) continue;
+        int ref = ks.front();
+        for (int k : ks) ref = kept_of[k].size() > kept_of[ref].size() ? k : ref;
+        std::vector<int> strays;
+        for (int k : ks) {
+          if (k == ref) continue;
+          double r0 = 0, r1 = 0, k0 = 0, k1 = 0;
+          ends(ref, &r0, &r1);
+          ends(k, &k0, &k1);
+          const double t_origin = k0 > r1 ? r1 : r0;
+          const PixelPoint origin = tracks[ref].At(t_origin);
+          const FlowPath path(flow, origin, std::max(std::abs(k0 - t_origin), std::abs(k1 - t_origin)) + 30.0);
+          int on = 0, n = 0;
+          for (const auto& [j, i] : kept_of[k]) {
+            const double dt = result.images[i].mid_s - t_origin;
+            if (!path.Covers(dt)) continue;
+            const PixelPoint q = path.At(dt);
+            ++n;
+            on += Dist(q, c.p[i]) <= options.flow_tolerance_px + options.flow_tolerance_fraction * Dist(q, origin);
+          }
+          if (2 * on < n) strays.push_back(k);
+        }
+        if (strays.empty()) continue;
+        if (ks.size() == 2) strays = ks;
+        for (int k : strays) {
+          numbers[root] &= ~(1 << (result.chains[k].trail - 1));
+          result.bad_images -= result.chains[k].bad_images;
+          refuse(result.chains[k], kept_of[k], "off_flow");
+          kept_of[k].clear();
+        }
+      }
+    };
+    check_joins();
     // Adds the trails of `star` holding enough images to the star of `root` (-1: a new star).
     auto add_star = [&](const trail_internal::FlowStar& star, double rate_px_per_s, int root) {
       // (a decoded star's missing trail: its timing is the star's, its images need only be many enough for the fit)

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <map>
 #include <numbers>
@@ -202,40 +203,39 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   EXPECT_EQ(score.wrong, 0);
   EXPECT_GT(score.clean_dots, 2000);
   EXPECT_GE(score.right, score.clean_dots * 85 / 100);  // figures in docs/trails.md
+  // The same field linked with some steps changed.
+  auto rescored = [&](const char* what, const std::function<void(TrailOptions*)>& change) {
+    TrailOptions o = field->options;
+    change(&o);
+    const Score s = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, o), false);
+    std::printf("[crowded, %s] %ld tagged right, %ld wrong\n", what, s.right, s.wrong);
+    return s;
+  };
   // Without the crowded-field checks the same field is tagged wrongly: the test can fail.
-  TrailOptions loose = field->options;
-  loose.flux_tolerance = 0;
-  loose.run_flux_tolerance = 1e9;
-  loose.tight_tolerance_px = 1e9;
-  loose.crowd_radius_fwhm = 0;
-  loose.max_leverage = 1.0;
-  loose.max_median_residual_px = 1e9;
-  loose.clean_radius_spacings = 0;
-  const Score loose_score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, loose), false);
-  std::printf("[crowded, checks off] %ld tagged right, %ld wrong\n", loose_score.right, loose_score.wrong);
-  EXPECT_GT(loose_score.wrong, 0);
+  const Score loose = rescored("checks off", [](TrailOptions* o) {
+    o->flux_tolerance = 0;
+    o->run_flux_tolerance = 1e9;
+    o->tight_tolerance_px = 1e9;
+    o->crowd_radius_fwhm = 0;
+    o->max_leverage = 1.0;
+    o->max_median_residual_px = 1e9;
+    o->clean_radius_spacings = 0;
+  });
+  EXPECT_GT(loose.wrong, 0);
   // Without the sibling growth, the separator seeds and the plate's flow (docs/trails.md, "Hidden runs",
-  // "The plate's flow") fewer are found; without the flow alone, fewer too.
-  TrailOptions runs_only = field->options;
-  runs_only.grow_siblings = runs_only.pattern_trails = runs_only.flow_trails = false;
-  const Score runs_score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, runs_only), false);
-  std::printf("[crowded, leading runs only] %ld tagged right, %ld wrong\n", runs_score.right, runs_score.wrong);
-  EXPECT_EQ(runs_score.wrong, 0);
-  EXPECT_LT(runs_score.right, score.right * 9 / 10);
-  TrailOptions no_flow = field->options;
-  no_flow.flow_trails = false;
-  const Score no_flow_score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, no_flow), false);
-  std::printf("[crowded, without the flow] %ld tagged right, %ld wrong\n", no_flow_score.right, no_flow_score.wrong);
-  EXPECT_EQ(no_flow_score.wrong, 0);
-  EXPECT_LT(no_flow_score.right, score.right);
-  // Without the lone trails numbered by their runs along the flow (docs/trails.md, "The plate's flow" 4):
-  // fewer; with them no wrong tag (above).
-  TrailOptions no_lone = field->options;
-  no_lone.flow_lone_trails = false;
-  const Score no_lone_score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, no_lone), false);
-  std::printf("[crowded, without lone trails] %ld tagged right, %ld wrong\n", no_lone_score.right, no_lone_score.wrong);
-  EXPECT_EQ(no_lone_score.wrong, 0);
-  EXPECT_LT(no_lone_score.right, score.right);
+  // "The plate's flow") fewer are found; without the flow alone, fewer too; without the lone trails numbered
+  // by their runs along the flow ("The plate's flow" 4), fewer.
+  const Score runs_only = rescored("leading runs only", [](TrailOptions* o) {
+    o->grow_siblings = o->pattern_trails = o->flow_trails = false;
+  });
+  EXPECT_EQ(runs_only.wrong, 0);
+  EXPECT_LT(runs_only.right, score.right * 9 / 10);
+  const Score no_flow = rescored("without the flow", [](TrailOptions* o) { o->flow_trails = false; });
+  EXPECT_EQ(no_flow.wrong, 0);
+  EXPECT_LT(no_flow.right, score.right);
+  const Score no_lone = rescored("without lone trails", [](TrailOptions* o) { o->flow_lone_trails = false; });
+  EXPECT_EQ(no_lone.wrong, 0);
+  EXPECT_LT(no_lone.right, score.right);
 }
 
 // Stars with a single trail on the plate (as where the others leave the format): no sibling can number it,
@@ -249,10 +249,10 @@ TEST(TrailCrowded, LoneTrailsAreNumberedByTheirRunsAlongTheFlow) {
     for (char ch : t.star_id) h = 31 * h + static_cast<unsigned char>(ch);
     return t.trail == "T" + std::to_string(1 + h % 4);
   });
-  // Without the separator seeds: in a field of lone trails only, their numbering by a grown sibling finds
-  // chance "siblings" among other stars' images (38 wrong tags here, one star; none on the simulated plates).
-  TrailOptions options = field->options;
-  options.pattern_trails = false;
+  // (With every option: in a field of lone trails only, a separator-grown trail numbered by a grown sibling
+  // found a chance "sibling" among other stars' images, 38 wrong tags on one star, until the flow checked
+  // every star's joins: docs/trails.md, "The plate's flow" 1.)
+  const TrailOptions& options = field->options;
   const Score score = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, options), true);
   TrailOptions no_lone = options;
   no_lone.flow_lone_trails = false;

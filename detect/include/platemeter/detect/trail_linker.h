@@ -163,7 +163,7 @@ struct TrailImage {
   std::string reason;              // why not assigned: not_star, unlinked, at_edge, image_before_run,
                                    // short_pattern, ambiguous, contested, leading_dashes_incomplete,
                                    // doubtful_number, lone_trail, poor_track, unconfirmed, run_flux,
-                                   // off_track, unverified, blended, unjoined, unresolved_run;
+                                   // off_track, unverified, blended, unjoined, unresolved_run, off_flow;
                                    // for bad (still assigned) images: bad_fit
 };
 

@@ -68,7 +68,8 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
                   const std::function<bool(int)>& excluded, FlowStar* out) {
   const TrailOptions& o = c.o;
   const DetectedStar& d = c.images[dash];
-  if (d.length_px <= 0 || d.flux_dn <= 0 || (d.flags & kStarBlended)) return false;
+  // (point images too: where a dash is at most two FWHM long, Compatible takes them; measured lengths needed)
+  if (!c.use_lengths || d.flux_dn <= 0 || (d.flags & kStarBlended)) return false;
   const PixelPoint p = c.p[dash];
   const PixelPoint v = flow.Velocity(p);
   const double speed = std::hypot(v.x_px, v.y_px);

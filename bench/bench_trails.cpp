@@ -299,7 +299,7 @@ int main(int argc, char** argv) {
   }
   auto whole = [&](const TruthImage& t) { return t.dot && trail_inside[{t.star, t.trail}]; };
   // Complete trails: every dash and dot exposed on the format (a trail entering it after its leading run has
-  // no number of its own; only its siblings can tell it). Table 1 defaults: trail t has t + 1 leading dashes.
+  // no number of its own; only its siblings can tell it). The spec above: trail t has t + 1 leading dashes.
   std::map<std::pair<int, int>, int> images_of_trail;
   for (const TruthImage& t : truth_images) ++images_of_trail[{t.star, t.trail}];
   auto complete = [&](const TruthImage& t) { return images_of_trail[{t.star, t.trail}] == 25 + (t.trail + 1) + 4; };

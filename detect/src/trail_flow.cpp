@@ -27,6 +27,19 @@ void AddFlowSamples(const Track& track, const std::vector<double>& t_s, std::vec
   }
 }
 
+ProgramCover CoverOf(const Context& c, const std::vector<std::vector<std::pair<int, int>>>& taken_per_trail, int seed) {
+  ProgramCover cover;
+  std::vector<double> durations_s;
+  for (size_t t = 0; t < taken_per_trail.size(); ++t)
+    for (const auto& [j, i] : taken_per_trail[t]) {
+      cover.other_dashes += i != seed && c.per_trail[t][j].kind == ExposureKind::kDash;
+      durations_s.push_back(c.per_trail[t][j].duration_s);
+    }
+  std::sort(durations_s.begin(), durations_s.end());
+  cover.durations = static_cast<int>(std::unique(durations_s.begin(), durations_s.end()) - durations_s.begin());
+  return cover;
+}
+
 FlowPath PlatePath(const Context& c, const SkyFlow& flow, const PixelPoint& p) {
   double t_first_s = 1e300, t_last_s = -1e300;
   for (const auto& ex : c.per_trail)
@@ -137,20 +150,11 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       if (!decoded) continue;
       // Dashes besides the seed: a seed merged with another image (twice its flux) reads the star's 1.2 s
       // dots as 0.6 s ones, its 10 s dots as 6.2 s ones; its own dashes, half the flux expected then, are
-      // not taken.
-      int dashes = 0;
-      std::vector<double> durations;
-      for (size_t t = 0; t < s.taken.size(); ++t)
-        for (const auto& [j, i] : s.taken[t]) {
-          dashes += i != dash && c.per_trail[t][j].kind == ExposureKind::kDash;
-          durations.push_back(c.per_trail[t][j].duration_s);
-        }
-      if (dashes < kOtherDashes) continue;
-      // Images of at least four of the program's six exposure durations: a reading shifted within the trails
-      // maps the star's dots onto other groups, and the flux tolerance (a faint dot's sigma) lets some of
-      // those through (on the whole V <= 8 plate: 1.2 s dots read as 0.6 s ones, 10 s as 6.2 s), not all.
-      std::sort(durations.begin(), durations.end());
-      if (std::unique(durations.begin(), durations.end()) - durations.begin() < need_durations) continue;
+      // not taken. Images of at least four of the program's six exposure durations: a reading shifted within
+      // the trails maps the star's dots onto other groups, and the flux tolerance (a faint dot's sigma) lets
+      // some of those through (on the whole V <= 8 plate: 1.2 s dots read as 0.6 s ones, 10 s as 6.2 s), not all.
+      const ProgramCover cover = CoverOf(c, s.taken, dash);
+      if (cover.other_dashes < kOtherDashes || cover.durations < need_durations) continue;
       best = std::move(s);
     }
   if (readings != 1 || best.hits == 0) return false;

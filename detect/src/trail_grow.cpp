@@ -24,9 +24,8 @@ bool Compatible(const Context& c, int i, const ShutterExposure& e, const PixelPo
   if (c.use_lengths) {
     const double expect = e.duration_s * rate_px_per_s;
     const double tol = c.o.dash_length_tolerance * expect + c.o.psf_fwhm_px + 3.0 * c.images[i].sigma_length_px;
-    // A point image (length 0): the detector saw no sweep over about one FWHM in its thresholded moments, which
-    // run short; a slow star's 20 s dash of up to two FWHM is measured so (whole V <= 8 plate: +110 dots right).
-    const bool point_fits = c.images[i].length_px <= 0 && expect <= 2.0 * c.o.psf_fwhm_px;
+    // (whole V <= 8 plate: +110 dots right with point images taken as short dashes)
+    const bool point_fits = c.images[i].length_px <= 0 && PointMayBeSwept(c.o, expect);
     if (!point_fits && std::abs(c.images[i].length_px - expect) > tol) return false;
     // A segment of two FWHM or more lies along the track (a crossing star's dash does not).
     if (c.images[i].length_px >= 2.0 * c.o.psf_fwhm_px && rate_px_per_s > 0) {

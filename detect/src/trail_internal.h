@@ -111,6 +111,19 @@ inline bool CouldHoldDash(const DetectedStar& d, double dash_flux, double dash_l
   return !(dash_flux > 0 && d.flux_dn > 0 && d.flux_dn < 0.5 * dash_flux && d.length_px < 0.5 * dash_length);
 }
 
+// Whether a point image (length 0) may be an exposure expected expect_px long: the detector sees no sweep
+// under about one FWHM in its thresholded moments, which run short, so a swept image of up to two FWHM (a
+// slow star's 20 s dash) is often measured as a point.
+inline bool PointMayBeSwept(const TrailOptions& o, double expect_px) { return expect_px <= 2.0 * o.psf_fwhm_px; }
+
+// What a reading's images show of the program: dashes besides the seed, and distinct exposure durations
+// (a reading shifted by a dot group maps the dots onto other durations; the flux tolerance lets some through,
+// not all). taken_per_trail: (exposure, image) per trail (0-based).
+struct ProgramCover {
+  int other_dashes = 0, durations = 0;
+};
+ProgramCover CoverOf(const Context& c, const std::vector<std::vector<std::pair<int, int>>>& taken_per_trail, int seed);
+
 // Track degree the taken images support (span and count), capped by the option.
 int DegreeFor(int n, double span_s, int max_degree);
 

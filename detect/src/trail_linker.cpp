@@ -877,15 +877,15 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         std::vector<int> strays;
         for (int k : ks) {
           if (k == ref) continue;
-          double r0 = 0, r1 = 0, k0 = 0, k1 = 0;
-          ends(ref, &r0, &r1);
-          ends(k, &k0, &k1);
-          const double t_origin = k0 > r1 ? r1 : r0;
-          const PixelPoint origin = tracks[ref].At(t_origin);
-          const FlowPath path(flow, origin, std::max(std::abs(k0 - t_origin), std::abs(k1 - t_origin)) + 30.0);
+          double ref0_s = 0, ref1_s = 0, k0_s = 0, k1_s = 0;
+          ends(ref, &ref0_s, &ref1_s);
+          ends(k, &k0_s, &k1_s);
+          const double t_origin_s = k0_s > ref1_s ? ref1_s : ref0_s;
+          const PixelPoint origin = tracks[ref].At(t_origin_s);
+          const FlowPath path(flow, origin, std::max(std::abs(k0_s - t_origin_s), std::abs(k1_s - t_origin_s)) + 30.0);
           int on = 0, n = 0;
           for (const auto& [j, i] : kept_of[k]) {
-            const double dt = result.images[i].mid_s - t_origin;
+            const double dt = result.images[i].mid_s - t_origin_s;
             if (!path.Covers(dt)) continue;
             const PixelPoint q = path.At(dt);
             ++n;
@@ -957,7 +957,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     for (int i : usable_ids) {
       if (result.images[i].chain >= 0 || c.elongated[i] || images[i].length_px > 0) continue;
       const PixelPoint v = flow.Velocity(c.p[i]);
-      if (20.0 * std::hypot(v.x_px, v.y_px) <= 2.0 * options.psf_fwhm_px) seeds.push_back(i);
+      const double dash_px = c.per_trail.front().front().duration_s * std::hypot(v.x_px, v.y_px);
+      if (trail_internal::PointMayBeSwept(options, dash_px)) seeds.push_back(i);
     }
     std::sort(seeds.begin(), seeds.end(), [&](int x, int y) { return images[x].flux_dn > images[y].flux_dn; });
     for (int dash : seeds) {

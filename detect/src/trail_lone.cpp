@@ -31,7 +31,7 @@ constexpr int kCandidateImages = 5;
 constexpr int kOtherDashes = 2, kDurations = 4;
 // A slow star (10 s of motion within this many flow tolerances) is not decoded: readings shifted by 10 s land
 // on its own images. (Its run may merge: the merged explanation below counts it.)
-constexpr double kSlowTolerances = 2.0;
+constexpr double kNotDecodedTolerances = 2.0;
 
 }  // namespace
 
@@ -48,7 +48,7 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   const double speed = std::hypot(v.x_px, v.y_px);
   const ShutterExposure& a_dash = c.per_trail.front().front();  // a leading dash: every dash lasts 20 s
   if (!Compatible(c, dash, a_dash, v, 0.0)) return false;
-  if (10.0 * speed < kSlowTolerances * o.flow_tolerance_px) return false;
+  if (10.0 * speed < kNotDecodedTolerances * o.flow_tolerance_px) return false;
   const double flux_per_s = d.flux_dn / a_dash.duration_s;
   const FlowPath path = PlatePath(c, flow, p);
   const unsigned every_trail = (1u << c.per_trail.size()) - 1u;
@@ -184,15 +184,11 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
     if (single[k] >= 0) out->taken.push_back({n - 1 - k, single[k]});  // merged dashes are not tagged
   const int shift = n - first_dot;
   for (const auto& [k, i] : best->program) out->taken.push_back({k + shift, i});
-  std::vector<double> durations;
-  int dashes = 0;
-  for (const auto& [k, i] : out->taken) {
-    durations.push_back(c.per_trail[trail][k].duration_s);
-    dashes += i != dash && c.per_trail[trail][k].kind == ExposureKind::kDash;
-  }
-  std::sort(durations.begin(), durations.end());
-  const long distinct = std::unique(durations.begin(), durations.end()) - durations.begin();
-  return static_cast<int>(out->taken.size()) >= o.flow_min_images && dashes >= kOtherDashes && distinct >= kDurations;
+  std::vector<std::vector<std::pair<int, int>>> per_trail(c.per_trail.size());
+  per_trail[trail] = out->taken;
+  const ProgramCover cover = CoverOf(c, per_trail, dash);
+  return static_cast<int>(out->taken.size()) >= o.flow_min_images && cover.other_dashes >= kOtherDashes &&
+         cover.durations >= kDurations;
 }
 
 }  // namespace platemeter::trail_internal

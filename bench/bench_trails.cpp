@@ -334,6 +334,7 @@ int main(int argc, char** argv) {
   std::map<std::string, std::map<std::pair<int, int>, int>> truth_images_of;  // found star -> (truth star, trail)
                                                                             // -> images tagged right
   std::map<const TruthImage*, std::string> found_star_of_dot;
+  std::set<int> wrong_stars;  // truth stars with a wrong tag (--lost lists their dashes)
   double err2 = 0, norm2 = 0;
   long n_err = 0;
   for (const MeasuredPoint& m : measured.points) {
@@ -368,6 +369,18 @@ int main(int argc, char** argv) {
     }
     if (!ok) {
       ++wrong;
+      wrong_stars.insert(t->star);
+      if (lost_out)
+        std::fprintf(lost_out, "wrong %s T%d %c%d %.3f %.3f tagged %s %s\n", star_names[t->star].c_str(), t->trail,
+                     t->dot ? 'D' : 'L', t->index, t->x_px, t->y_px, m.id.c_str(), m.mid_time_utc.c_str());
+      if (lost_out)
+        index.ForNear(*m.x_px, *m.y_px, [&](const TruthImage& u) {
+          const double d_px = std::hypot(u.x_px - *m.x_px, u.y_px - *m.y_px);
+          if (d_px < 3.0)
+            std::fprintf(lost_out, "  near %s T%d %c%d at %.3f %.3f: %.2f px (measured %.3f %.3f)\n",
+                         star_names[u.star].c_str(), u.trail, u.dot ? 'D' : 'L', u.index, u.x_px, u.y_px, d_px, *m.x_px,
+                         *m.y_px);
+        });
       if (wrong <= 10)
         std::printf("  wrong: %s-T%d-%c%d tagged %s %s\n", star_names[t->star].c_str(), t->trail, t->dot ? 'D' : 'L',
                     t->index, m.id.c_str(), m.mid_time_utc.c_str());
@@ -457,7 +470,7 @@ int main(int argc, char** argv) {
     }
     if (lost_out) {
       for (const TruthImage& t : truth_images)
-        if (!t.dot && lost_stars.count(t.star))
+        if (!t.dot && (lost_stars.count(t.star) || wrong_stars.count(t.star)))
           std::fprintf(lost_out, "dash %s T%d %d %.3f %.3f\n", star_names[t.star].c_str(), t.trail, t.index, t.x_px, t.y_px);
       std::fclose(lost_out);
     }

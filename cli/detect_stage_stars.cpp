@@ -166,9 +166,12 @@ StageOutput RunStarStage(const DetectContext& context) {
   nlohmann::json reasons = nlohmann::json::object();
   for (const auto& [reason, n] : unassigned) reasons[reason] = n;
   long decoded = 0;
-  for (const TrailChain& c : linked.chains) decoded += c.trail > 0;
+  nlohmann::json by_step = nlohmann::json::object();
+  for (const TrailChain& c : linked.chains)
+    if (c.trail > 0) ++decoded, by_step[c.decoded_by] = by_step.value(c.decoded_by, 0L) + 1;
   out.summary["trails"] = {{"decoded_trails", decoded},
                            {"refused_runs", static_cast<long>(linked.chains.size()) - decoded},
+                           {"decoded_trails_by_step", by_step},
                            {"stars", linked.stars.size()},
                            {"assigned_dots", linked.assigned_dots},
                            {"assigned_dashes", linked.assigned_dashes},

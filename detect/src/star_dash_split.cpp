@@ -129,7 +129,8 @@ std::vector<Component> SplitComponents(cv::Mat* labels, const cv::Mat& filtered,
     const size_t n = leaves.size();
     std::vector<Component> parts(n);
     std::vector<int> x0(n, 1 << 30), y0(n, 1 << 30), x1(n, -1), y1(n, -1);
-    for (size_t k = 0; k < n; ++k) parts[k].label = k == 0 ? c.label : (*next_label)++;
+    for (size_t k = 0; k < n; ++k)
+      parts[k].label = k == 0 ? c.label : (*next_label)++, parts[k].crowded = c.crowded, parts[k].clump = c.clump;
     for (int y = 0; y < c.height; ++y)
       for (int x = 0; x < c.width; ++x) {
         const int k = owner.at<int>(y, x);

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <set>
 #include <opencv2/imgproc.hpp>
 
 #include "platemeter/core/error.h"
@@ -278,6 +279,7 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
   for (int l = 1; l < n; ++l) {
     Component c;
     c.label = l;
+    c.clump = l;
     c.area = comp.at<int>(l, cv::CC_STAT_AREA);
     c.x = comp.at<int>(l, cv::CC_STAT_LEFT), c.y = comp.at<int>(l, cv::CC_STAT_TOP);
     c.width = comp.at<int>(l, cv::CC_STAT_WIDTH), c.height = comp.at<int>(l, cv::CC_STAT_HEIGHT);
@@ -299,17 +301,21 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
       level[k] = static_cast<float>(o.threshold_sigma * sigma_f);
       rise[k] = static_cast<float>(3.5 * sigma_f);
     }
-    // Large components that are not line-like (reseau crosses, dust) are not split: a cross's arms
-    // would pass as dashes. Runs of dashes, and a dash with a dot beside it, are line-like.
+    // Clumps: components longer than a run of five leading dashes (140 s = 7 dash lengths), or large and
+    // not line-like (crossing trails; also reseau crosses, dust, scratches). They are deblended too (on a
+    // crowded plate they hold a tenth of the measurable dots) and their pieces flagged crowded: a dash
+    // crossed by other images may come out in parts, which the linker must not take for empty places. A
+    // defect that does not fall apart stays whole and is rejected by the shape tests below.
     std::vector<Component> whole, split;
     std::vector<float> split_level, split_rise;
     for (size_t k = 0; k < components.size(); ++k) {
-      const Component& c = components[k];
+      Component& c = components[k];
       const double long_side = std::max(c.width, c.height);
-      // Longer than a run of five leading dashes (140 s = 7 dash lengths): a line (scratch), kept whole.
       const bool too_long = long_side > 7.0 * (1.0 + o.dash_length_tolerance) * o.max_dash_length_px + 6.0 * o.psf_fwhm_px;
-      const bool sparse = too_long || (long_side > 4.0 * o.psf_fwhm_px && MaskElongation(labels, c) <= 3.0);
-      if (sparse) {
+      const bool blob = long_side > 4.0 * o.psf_fwhm_px && MaskElongation(labels, c) <= 3.0;
+      const bool cross_like = blob && c.area < 0.3 * c.width * c.height;
+      c.crowded = too_long || blob;
+      if (!too_long && cross_like) {  // a reseau cross's arms would pass as dashes
         whole.push_back(c);
       } else {
         split.push_back(c), split_level.push_back(level[k]), split_rise.push_back(rise[k]);
@@ -490,6 +496,21 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
       result.push_back(d);
     }
   });
+  // A clump still holding a line after deblending holds a scratch: its other pieces are parts of it, or of
+  // what it crosses (a reseau cross's arms, cut from it, pass as dashes): all rejected as the line.
+  std::set<int> line_clumps;
+  for (size_t ci = 0; ci < components.size(); ++ci)
+    if (components[ci].crowded)
+      for (const DetectedStar& d : found[ci])
+        if (d.point.reason == "line") line_clumps.insert(components[ci].clump);
+  for (size_t ci = 0; ci < components.size(); ++ci) {
+    if (!components[ci].crowded) continue;
+    for (DetectedStar& d : found[ci]) {
+      d.flags |= kStarCrowded;
+      if (line_clumps.count(components[ci].clump) && d.point.status == PointStatus::kMeasured)
+        d.point.status = PointStatus::kRejected, d.point.reason = "line", d.flags |= kStarDefect;
+    }
+  }
   for (auto& v : found)
     for (auto& d : v) {
       if (stats && d.point.status == PointStatus::kRejected) ++stats->defects;
@@ -519,9 +540,9 @@ void CheckOrThrow(const StarDetectorOptions& options) {
 }  // namespace
 
 std::string StarFlagNames(unsigned flags) {
-  static const char* names[] = {"saturated", "blended", "truncated", "elongated", "defect"};
+  static const char* names[] = {"saturated", "blended", "truncated", "elongated", "defect", "crowded"};
   std::string s;
-  for (int i = 0; i < 5; ++i)
+  for (int i = 0; i < 6; ++i)
     if (flags & (1u << i)) s += (s.empty() ? "" : ",") + std::string(names[i]);
   return s;
 }

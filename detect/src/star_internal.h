@@ -91,6 +91,8 @@ struct Component {
   int label = 0;
   int x = 0, y = 0, width = 0, height = 0;
   int area = 0;
+  bool crowded = false;  // trail mode: a clump too long or too wide for one trail image (pieces inherit it)
+  int clump = 0;         // the label of the component a piece was cut from (its own label if not cut)
 };
 
 // Trail mode: deblends the components longer than min_long_side_px

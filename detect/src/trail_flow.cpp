@@ -32,6 +32,7 @@ ProgramCover CoverOf(const Context& c, const std::vector<std::vector<std::pair<i
   std::vector<double> durations_s;
   for (size_t t = 0; t < taken_per_trail.size(); ++t)
     for (const auto& [j, i] : taken_per_trail[t]) {
+      if (!IsEvidence(c, i)) continue;
       cover.other_dashes += i != seed && c.per_trail[t][j].kind == ExposureKind::kDash;
       durations_s.push_back(c.per_trail[t][j].duration_s);
     }
@@ -82,7 +83,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   const TrailOptions& o = c.o;
   const DetectedStar& d = c.images[dash];
   // (point images too: where a dash is at most two FWHM long, Compatible takes them; measured lengths needed)
-  if (!c.use_lengths || d.flux_dn <= 0 || (d.flags & kStarBlended)) return false;
+  if (!c.use_lengths || d.flux_dn <= 0 || (d.flags & kStarBlended) || !IsEvidence(c, dash)) return false;
   const PixelPoint p = c.p[dash];
   const PixelPoint v = flow.Velocity(p);
   const double speed = std::hypot(v.x_px, v.y_px);
@@ -108,18 +109,25 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   struct Evidence {
     int first = 0, second_images = 0, second_dots = 0;
   };
+  // A second trail must show a dash of its own (a separator: the brightest images of its program): a
+  // group of evenly spaced dots of another star on nearly the same diurnal arc, at the place of a
+  // neighbouring trail under a reading shifted by a break, lines up with no dash (whole plate: a lone
+  // trail read under the next number so, 15 wrong tags).
   auto evidence = [&](const FlowStar& s) {
-    Evidence ev;
-    int top = -1;
+    std::vector<int> images(s.taken.size(), 0), dots(s.taken.size(), 0), dashes(s.taken.size(), 0);
     for (size_t t = 0; t < s.taken.size(); ++t)
-      if (top < 0 || s.taken[t].size() > s.taken[top].size()) top = static_cast<int>(t);
-    ev.first = static_cast<int>(s.taken[top].size());
+      for (const auto& [j, i] : s.taken[t]) {
+        if (!IsEvidence(c, i)) continue;
+        ++images[t];
+        (c.per_trail[t][j].kind == ExposureKind::kDot ? dots : dashes)[t]++;
+      }
+    const int top = static_cast<int>(std::max_element(images.begin(), images.end()) - images.begin());
+    Evidence ev;
+    ev.first = images[top];
     for (size_t t = 0; t < s.taken.size(); ++t) {
-      if (static_cast<int>(t) == top) continue;
-      int dots = 0;
-      for (const auto& [j, i] : s.taken[t]) dots += c.per_trail[t][j].kind == ExposureKind::kDot;
-      if (dots > ev.second_dots || (dots == ev.second_dots && static_cast<int>(s.taken[t].size()) > ev.second_images))
-        ev.second_dots = dots, ev.second_images = static_cast<int>(s.taken[t].size());
+      if (static_cast<int>(t) == top || dashes[t] < 1) continue;
+      if (dots[t] > ev.second_dots || (dots[t] == ev.second_dots && images[t] > ev.second_images))
+        ev.second_dots = dots[t], ev.second_images = images[t];
     }
     return ev;
   };

@@ -106,19 +106,47 @@ void ForReaching(const Context& c, const Grid& all, const PixelPoint& q, double 
 
 // Whether a detection may hold (or be) a 20 s dash of a star whose dashes measure this flux and
 // length: anything but an image measured fainter than half the dash and shorter than half of it
-// (another star's dot; a dash merged with another image measures at least the dash's flux).
+// (another star's dot; a dash merged with another image measures at least the dash's flux). A piece of
+// a crowded clump always may: the deblender may have cut a dash into parts, each fainter than half.
 inline bool CouldHoldDash(const DetectedStar& d, double dash_flux, double dash_length) {
-  return !(dash_flux > 0 && d.flux_dn > 0 && d.flux_dn < 0.5 * dash_flux && d.length_px < 0.5 * dash_length);
+  return (d.flags & kStarCrowded) ||
+         !(dash_flux > 0 && d.flux_dn > 0 && d.flux_dn < 0.5 * dash_flux && d.length_px < 0.5 * dash_length);
 }
+
+// Whether the images near a place may hold a dash between them: one that could on its own, or pieces fainter
+// than half of it whose fluxes add up to half of it (the deblender may cut a dash crossed by other images).
+struct DashHolder {
+  double dash_flux, dash_length;
+  double faint_flux_dn = 0;
+  bool held = false;
+  void Add(const DetectedStar& d) {
+    if (CouldHoldDash(d, dash_flux, dash_length)) held = true;
+    else faint_flux_dn += d.flux_dn;
+  }
+  bool Holds() const { return held || faint_flux_dn >= 0.5 * dash_flux; }
+};
+
+// Whether nothing could hold a dash of this flux, duration_s of motion long, predicted at q (within tol_px)
+// moving with this velocity: no detection, alone or with others (DashHolder), within half the dash and two
+// FWHM along the motion and 1.5 FWHM across it (a neighbouring star's parallel trail, a few FWHM aside,
+// holds none of it), and no rejected line reaching there.
+bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, const PixelPoint& velocity_px_per_s,
+                    double dash_flux, double duration_s, double tol_px);
 
 // Whether a point image (length 0) may be an exposure expected expect_px long: the detector sees no sweep
 // under about one FWHM in its thresholded moments, which run short, so a swept image of up to two FWHM (a
 // slow star's 20 s dash) is often measured as a point.
 inline bool PointMayBeSwept(const TrailOptions& o, double expect_px) { return expect_px <= 2.0 * o.psf_fwhm_px; }
 
+// Whether an image may count as evidence for a reading of the flow (a seed, a trail's images, a program's
+// cover): not a piece of a crowded clump, which the deblender cuts where it can, so that clumps offer a
+// piece near almost any prediction (on the whole V <= 8 plate: 21 wrong tags from readings seeded by, or
+// lined up with, such pieces). They may still be taken once a reading is decided.
+inline bool IsEvidence(const Context& c, int i) { return !(c.images[i].flags & kStarCrowded); }
+
 // What a reading's images show of the program: dashes besides the seed, and distinct exposure durations
 // (a reading shifted by a dot group maps the dots onto other durations; the flux tolerance lets some through,
-// not all). taken_per_trail: (exposure, image) per trail (0-based).
+// not all); evidence only (IsEvidence). taken_per_trail: (exposure, image) per trail (0-based).
 struct ProgramCover {
   int other_dashes = 0, durations = 0;
 };
@@ -126,6 +154,15 @@ ProgramCover CoverOf(const Context& c, const std::vector<std::vector<std::pair<i
 
 // Track degree the taken images support (span and count), capped by the option.
 int DegreeFor(int n, double span_s, int max_degree);
+
+// An image's position sigmas in a track fit: its formal ones (0.05 px if unknown) with position_floor_px.
+PixelPoint FitSigmaPx(const TrailOptions& o, const DetectedStar& d);
+
+// The track of a trail's images (exposure, image) at their mid times (time_s(image)) whose `use` is true,
+// weighted by FitSigmaPx; false when fewer than `min_images` or singular.
+bool FitTrackOf(const Context& c, const std::vector<std::pair<int, int>>& taken,
+                const std::function<double(int)>& time_s, const std::function<bool(int)>& use, size_t min_images,
+                Track* track);
 
 // Whether image i may be exposure e (elongation and measured length against the duration).
 // With measured lengths (trail-mode detection) the length decides, within its own sigma; else the flag.

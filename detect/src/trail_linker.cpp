@@ -186,8 +186,8 @@ bool FitTrail(const Context& c, const std::vector<std::pair<int, int>>& taken, T
     const DetectedStar& d = c.images[i];
     t[k] = (*out)[i].mid_s;
     p[k] = c.p[i];
-    sx[k] = std::hypot(d.point.sigma_x_px > 0 ? d.point.sigma_x_px : 0.05, o.position_floor_px);
-    sy[k] = std::hypot(d.point.sigma_y_px > 0 ? d.point.sigma_y_px : 0.05, o.position_floor_px);
+    const PixelPoint sigma = trail_internal::FitSigmaPx(o, d);
+    sx[k] = sigma.x_px, sy[k] = sigma.y_px;
   }
   Track track;
   bool fitted = false;
@@ -303,6 +303,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
                                                                      // its run, dash spacing)
   for (const std::vector<int>& run : FindRuns(c, dashes, dash_ids)) {
     TrailChain tc;
+    tc.decoded_by = "run";
     tc.leading_dashes = static_cast<int>(run.size());
     tc.images = run;
     auto refuse = [&](const std::string& reason) {
@@ -373,12 +374,12 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     }
     // An image there that cannot hold a dash of this star (measured flux under half a dash's and
     // shorter than half a dash: a faint star's dot) leaves N certain; anything else may be the dash.
-    bool occupied = false;
     double dash_flux = 0, dash_length = 0;
     for (int i : run) dash_flux += images[i].flux_dn / run.size(), dash_length += images[i].length_px / run.size();
-    trail_internal::ForReaching(c, all, before, std::max(options.min_tolerance_px, 0.5 * Dist(a, b)), [&](int i) {
-      if (CouldHoldDash(images[i], dash_flux, dash_length)) occupied = true;
-    });
+    trail_internal::DashHolder holder{dash_flux, dash_length};
+    trail_internal::ForReaching(c, all, before, std::max(options.min_tolerance_px, 0.5 * Dist(a, b)),
+                                [&](int i) { holder.Add(images[i]); });
+    const bool occupied = holder.Holds();
     // Occupied: the number needs its siblings' confirmation (step 4); no clean-field exception.
     if (occupied) before_occupied[result.chains.size()] = true;
     before_of[result.chains.size()] = {before, Dist(a, b)};
@@ -484,12 +485,38 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         median_residual = res.empty() ? 0.0 : res[res.size() / 2];
       }
       bool dropped = false;
+      // A piece of a crowded clump fitted jointly with a neighbour (blended and crowded) may carry part of
+      // the neighbour's position (two dots 2 px apart, measured 1.5 px off the right one), and two such at
+      // a trail's end pull the track onto themselves: each must lie on the track of the trail's other
+      // images (within 3 median residuals and 0.1 px, that track known there to a third of it); else it
+      // cannot be checked.
+      const auto shared = [&](int i) { return (images[i].flags & kStarCrowded) && (images[i].flags & kStarBlended); };
+      trail_internal::Track own;
+      const bool own_fitted = trail_internal::FitTrackOf(
+          c, kept, [&](int i) { return result.images[i].mid_s; }, [&](int i) { return !shared(i) && !result.images[i].bad; },
+          6, &own);
       {
         std::vector<std::pair<int, int>> good;
         tc.images.clear();
         for (const auto& [j, i] : kept) {
           TrailImage& ti = result.images[i];
           bool crowded = false;
+          if (shared(i) && !ti.bad) {
+            bool on_own = false;
+            if (own_fitted) {
+              double sx = 0, sy = 0;
+              own.SigmaAt(ti.mid_s, &sx, &sy);
+              const double limit_px = std::max(0.1, 3.0 * median_residual);
+              on_own = 3.0 * std::hypot(sx, sy) <= limit_px && Dist(own.At(ti.mid_s), c.p[i]) <= limit_px;
+            }
+            if (!on_own) {
+              (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
+              ti = TrailImage{};
+              ti.reason = own_fitted ? "off_track" : "unverified";
+              dropped = true;
+              continue;
+            }
+          }
           // (an image the detector split from a neighbour, `blended`: off the track already beyond 3 median
           // residuals of the trail, 3.5 sigma, and 0.1 px)
           const bool split = (images[i].flags & kStarBlended) != 0;
@@ -500,9 +527,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
             });
           double hx = 0, hy = 0;
           if (!ti.bad) {
-            const DetectedStar& d = images[i];
-            tracks[cid].LeverageAt(ti.mid_s, std::hypot(d.point.sigma_x_px > 0 ? d.point.sigma_x_px : 0.05, options.position_floor_px),
-                                   std::hypot(d.point.sigma_y_px > 0 ? d.point.sigma_y_px : 0.05, options.position_floor_px), &hx, &hy);
+            const PixelPoint sigma = trail_internal::FitSigmaPx(options, images[i]);
+            tracks[cid].LeverageAt(ti.mid_s, sigma.x_px, sigma.y_px, &hx, &hy);
           }
           const bool unverified = std::max(hx, hy) > options.max_leverage;
           if (crowded || unverified) {
@@ -672,10 +698,11 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     // Unconfirmed: kept only where nothing could have hidden a leading dash (or posed as one).
     const auto& [before, spacing] = before_of.at(k);
     const auto& [dash_flux, dash_length] = dash_of.at(k);
-    bool clean = true;
+    trail_internal::DashHolder holder{dash_flux, dash_length};
     trail_internal::ForReaching(c, all, before, options.clean_radius_spacings * spacing, [&](int i) {
-      if (result.images[i].chain != k && CouldHoldDash(images[i], dash_flux, dash_length)) clean = false;
+      if (result.images[i].chain != k) holder.Add(images[i]);
     });
+    const bool clean = !holder.Holds();
     // A slow star's 10 s gaps (a third of the spacing) within the PSF: its dashes merge, a lost one leaves
     // no trace in front of the run.
     const bool unresolved = spacing / 3.0 < options.psf_fwhm_px;
@@ -717,10 +744,11 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   for (int k = 0; k < m; ++k)
     if (decoded(k)) numbers[Root(parent, k)] |= 1 << (result.chains[k].trail - 1);
   // A new chain (trail number s, its images (exposure, image)) as a star of its own; false when refused.
-  auto add_chain = [&](int s, const std::vector<std::pair<int, int>>& taken, double flux_per_s, double rate_px_per_s,
-                       int missed, int min_images = 0) {
+  auto add_chain = [&](const char* step, int s, const std::vector<std::pair<int, int>>& taken, double flux_per_s,
+                       double rate_px_per_s, int missed, int min_images = 0) {
     const int cid = static_cast<int>(result.chains.size());
     TrailChain tc;
+    tc.decoded_by = step;
     tc.trail = s + 1;
     tc.leading_dashes = program.leading_dashes[s];
     tc.rate_px_per_s = rate_px_per_s;
@@ -749,7 +777,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
                                                        [&](int i) { return result.images[i].chain >= 0; }, &taken);
           if (g.after_run < options.min_exposures_after_run) continue;
           const int cid = static_cast<int>(result.chains.size());
-          if (!add_chain(s, taken, flux_of.at(k), g.rate_px_per_s, g.missed)) continue;
+          if (!add_chain("sibling", s, taken, flux_of.at(k), g.rate_px_per_s, g.missed)) continue;
           // It must join k: each track carried to the other's end lands on it.
           double k0 = 0, k1 = 0, n0 = 0, n1 = 0;
           ends(k, &k0, &k1);
@@ -822,7 +850,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       for (const auto& [j, i] : pt.taken)
         if (j + shift >= 0) taken.push_back({j + shift, i});
       const int cid = static_cast<int>(result.chains.size());
-      if (!add_chain(best, taken, pt.flux_per_s, grown.rate_px_per_s, 0)) continue;
+      if (!add_chain("separators", best, taken, pt.flux_per_s, grown.rate_px_per_s, 0)) continue;
       // Its sibling's images taken by a decoded trail of that number: the two join when they lie on one arc.
       const int sib = grown.sibling;
       const std::vector<std::pair<int, int>>& sibling_images = grown.images;
@@ -911,9 +939,15 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       for (int s = 0; s < trails; ++s) {
         if (static_cast<int>(star.taken[s].size()) < min_images) continue;
         if (root >= 0 && (numbers[Root(parent, root)] >> s & 1)) continue;
+        // A new star's trail shows its phase: a dash of its own (a reading shifted by one dot of a group, 40 s,
+        // lines up the group's other dots but no dash: the separators fall between the dots).
+        if (root < 0 && std::none_of(star.taken[s].begin(), star.taken[s].end(), [&](const std::pair<int, int>& ji) {
+              return c.per_trail[s][ji.first].kind == ExposureKind::kDash && trail_internal::IsEvidence(c, ji.second);
+            }))
+          continue;
         const int cid = static_cast<int>(result.chains.size());
         // (the flow fixes its timing: no leading dashes needed)
-        if (!add_chain(s, star.taken[s], star.flux_per_s, rate_px_per_s, 0, min_images)) continue;
+        if (!add_chain("flow", s, star.taken[s], star.flux_per_s, rate_px_per_s, 0, min_images)) continue;
         if (root < 0) {
           root = cid;
           continue;
@@ -976,7 +1010,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         trail_internal::LoneTrail lone;
         if (!trail_internal::DecodeLoneTrail(c, all, flow, dash, excluded, &lone)) continue;
         const PixelPoint v = flow.Velocity(c.p[dash]);
-        add_chain(lone.trail, lone.taken, lone.flux_per_s, std::hypot(v.x_px, v.y_px), 0, options.flow_min_images);
+        add_chain("lone", lone.trail, lone.taken, lone.flux_per_s, std::hypot(v.x_px, v.y_px), 0, options.flow_min_images);
       }
     complete_stars();  // the new stars' trails short of flow_min_images in their reading
   };

@@ -43,7 +43,7 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   // (a blended seed too: a dash fitted jointly with the dot on its wing; one merged with another image reads
   // the star's flux wrong, and the durations below refuse it)
   // (point images too: where a dash is at most two FWHM long, Compatible takes them; measured lengths needed)
-  if (!c.use_lengths || d.flux_dn <= 0) return false;
+  if (!c.use_lengths || d.flux_dn <= 0 || !IsEvidence(c, dash)) return false;
   const PixelPoint v = flow.Velocity(p);
   const double speed = std::hypot(v.x_px, v.y_px);
   const ShutterExposure& a_dash = c.per_trail.front().front();  // a leading dash: every dash lasts 20 s
@@ -94,7 +94,8 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   // Exactly one group with the images of a candidate.
   const Group* best = nullptr;
   for (const auto& [key, g] : groups) {
-    if (static_cast<int>(g.program.size()) < kCandidateImages) continue;
+    const long evidence = std::count_if(g.program.begin(), g.program.end(), [&](const auto& ki) { return IsEvidence(c, ki.second); });
+    if (evidence < kCandidateImages) continue;
     if (best) return false;
     best = &g;
   }
@@ -149,17 +150,21 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
     const PixelPoint q = path.At(last_dash_s - 30.0 * m);
     const double reach_px = 0.5 * dash_length + 2.0 * o.psf_fwhm_px + o.flow_tolerance_px;
     bool empty = true;
+    double faint_flux_dn = 0;  // pieces of a dash the deblender cut add up
     ForReaching(c, all, q, reach_px, [&](int i) {
       const DetectedStar& h = c.images[i];
       // Another star's image, taken with that star's flux: had it swallowed this dash, its flux would exceed
       // that star's by the dash's, which the flux tolerance lets through only when dash_flux <= (tolerance x
       // its flux + 4 sigma) / (1 + tolerance).
-      const bool explained = excluded && excluded(i) && h.flux_dn > 0 &&
+      // (Not a piece of a crowded clump: the dash may have been cut, part of it taken with that image.)
+      const bool explained = excluded && excluded(i) && h.flux_dn > 0 && !(h.flags & kStarCrowded) &&
                              dash_flux > (o.flux_tolerance * h.flux_dn + 4.0 * h.sigma_flux_dn) / (1.0 + o.flux_tolerance);
-      const bool faint = h.flux_dn > 0 && h.flux_dn < 0.5 * dash_flux;
-      if (!faint && !explained && std::find(run.begin(), run.end(), i) == run.end()) empty = false;
+      const bool faint = h.flux_dn > 0 && h.flux_dn < 0.5 * dash_flux && !(h.flags & (kStarCrowded | kStarBlended));
+      if (explained || std::find(run.begin(), run.end(), i) != run.end()) return;
+      if (!faint) empty = false;
+      else faint_flux_dn += h.flux_dn;
     });
-    if (!empty) return false;
+    if (!empty || faint_flux_dn >= 0.5 * dash_flux) return false;
     break;
   }
   // The run's length must be a trail's.

@@ -82,23 +82,60 @@ bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int referenc
   return true;
 }
 
+namespace {
+
+// Whether the trail's run refutes number u: a leading dash it did not take lies inside the format where
+// nothing could hold it (a trail of 2 leading dashes read as the last two of 5).
+bool RunRefutes(const Context& c, const Grid& all, const Track& track, const std::vector<std::pair<int, int>>& as_u,
+                int u, double flux_per_s) {
+  const TrailOptions& o = c.o;
+  const std::vector<ShutterExposure>& ex = c.per_trail[u];
+  const PixelPoint first = c.p[as_u.front().second];
+  for (int j = 0; j < static_cast<int>(ex.size()) && ex[j].kind == ExposureKind::kDash && ex[j].group == 0; ++j) {
+    if (std::any_of(as_u.begin(), as_u.end(), [&](const std::pair<int, int>& ji) { return ji.first == j; })) continue;
+    const PixelPoint q = track.At(ex[j].mid_s);
+    if (!Inside(o, q, o.edge_margin_px)) continue;
+    const double tol_px = o.sibling_tolerance_px + o.sibling_tolerance_fraction * Dist(q, first);
+    if (DashPlaceEmpty(c, all, q, track.VelocityAt(ex[j].mid_s), flux_per_s * ex[j].duration_s, ex[j].duration_s, tol_px))
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, int reference,
                      const std::vector<int>& leading_dashes, const std::function<bool(int, int)>& other_number,
                      SiblingGrowth* grown) {
   const TrailOptions& o = c.o;
   const int trails = static_cast<int>(leading_dashes.size());
-  int best = -1, count = 0;
-  for (int u = 0; u < trails; ++u) {
-    // The trail's images re-timed as trail u (exposure j of the reference is j + N_u - N_ref of trail u).
-    const int shift = leading_dashes[u] - leading_dashes[reference];
+  // The trail's images re-timed as each trail u (exposure j of the reference is j + N_u - N_ref of trail u).
+  struct Reading {
     std::vector<std::pair<int, int>> as_u;
     std::vector<double> ts;
+    Track track;
+    bool fitted = false, refuted = false;
+  };
+  std::vector<Reading> readings(trails);
+  for (int u = 0; u < trails; ++u) {
+    Reading& r = readings[u];
+    const int shift = leading_dashes[u] - leading_dashes[reference];
     std::vector<PixelPoint> ps;
     for (const auto& [j, i] : pt.taken)
-      if (j + shift >= 0) as_u.push_back({j + shift, i}), ts.push_back(c.per_trail[u][j + shift].mid_s), ps.push_back(c.p[i]);
-    Track track;
-    if (ts.size() < 4 || !track.Fit(ts, ps, {}, {}, DegreeFor(static_cast<int>(ts.size()), ts.back() - ts.front(), o.track_degree)))
-      continue;
+      if (j + shift >= 0) r.as_u.push_back({j + shift, i}), r.ts.push_back(c.per_trail[u][j + shift].mid_s), ps.push_back(c.p[i]);
+    r.fitted = r.ts.size() >= 4 && r.track.Fit(r.ts, ps, {}, {}, DegreeFor(static_cast<int>(r.ts.size()), r.ts.back() - r.ts.front(), o.track_degree));
+    r.refuted = r.fitted && RunRefutes(c, all, r.track, r.as_u, u, pt.flux_per_s);
+  }
+  // The run tells only where some number's run is there: a trail whose leading dashes are all lost
+  // without trace (none of it on the plate) is left to its siblings.
+  const bool runs_tell = std::any_of(readings.begin(), readings.end(), [](const Reading& r) { return r.fitted && !r.refuted; });
+  int best = -1, count = 0;
+  for (int u = 0; u < trails; ++u) {
+    const Reading& r = readings[u];
+    if (!r.fitted || (runs_tell && r.refuted)) continue;
+    const std::vector<std::pair<int, int>>& as_u = r.as_u;
+    const std::vector<double>& ts = r.ts;
+    const Track& track = r.track;
     const PixelPoint v = track.VelocityAt(0.5 * (ts.front() + ts.back()));
     const double rate = std::hypot(v.x_px, v.y_px);
     const double gap_s = trails > 1 ? c.per_trail[1].front().mid_s - c.per_trail[0].back().mid_s : 0.0;
@@ -109,7 +146,9 @@ int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, 
       if (s < 0 || s >= trails || grows) continue;
       std::vector<std::pair<int, int>> sibling;
       const Growth g = GrowSibling(c, all, as_u, u, s, pt.flux_per_s, [&](int i) { return other_number(i, s); }, &sibling);
-      if (g.after_run < o.min_exposures_after_run) continue;
+      // (evidence only: a crowded clump offers a piece near almost any prediction)
+      const long evidence = std::count_if(sibling.begin(), sibling.end(), [&](const auto& ji) { return IsEvidence(c, ji.second); });
+      if (g.after_run < o.min_exposures_after_run || evidence < o.min_exposures_after_run) continue;
       // The sibling's own track: its images on it to their precision, and on one arc with the trail's.
       std::vector<double> st;
       std::vector<PixelPoint> sp;

@@ -334,6 +334,47 @@ TEST(StarDetectorTest, BandsReportEveryStarOnceAsTheWholeImageDoes) {
   EXPECT_EQ(banded_measured, measured);
 }
 
+// Adds a Gaussian PSF (sigma px) swept uniformly along a segment (length px, angle rad; 0: a point) of
+// this flux, integrated over each pixel by 8 x 8 sub-samples, to a w px wide image.
+void AddSweptImage(std::vector<float>* v, long w, double cx, double cy, double length, double angle, double flux,
+                   double sigma) {
+  const double c = std::cos(angle), sn = std::sin(angle);
+  const int reach = static_cast<int>(0.5 * length + 5 * sigma) + 2;
+  for (long y = std::lround(cy) - reach; y <= std::lround(cy) + reach; ++y)
+    for (long x = std::lround(cx) - reach; x <= std::lround(cx) + reach; ++x) {
+      double sum = 0;
+      for (int j = 0; j < 8; ++j)
+        for (int i = 0; i < 8; ++i) {
+          const double du = x - 0.5 + (i + 0.5) / 8 - cx, dv = y - 0.5 + (j + 0.5) / 8 - cy;
+          const double a = du * c + dv * sn, b = -du * sn + dv * c, hl = 0.5 * length;
+          const double along = length > 0 ? 0.5 * (std::erf((a + hl) / (std::sqrt(2.0) * sigma)) -
+                                                   std::erf((a - hl) / (std::sqrt(2.0) * sigma))) / length
+                                          : std::exp(-0.5 * a * a / (sigma * sigma)) / (std::sqrt(2 * M_PI) * sigma);
+          sum += along * std::exp(-0.5 * b * b / (sigma * sigma)) / (std::sqrt(2 * M_PI) * sigma);
+        }
+      (*v)[static_cast<size_t>(y * w + x)] += static_cast<float>(flux * sum / 64.0);
+    }
+}
+
+// Adds white Gaussian noise (sigma DN; Box-Muller on a fixed LCG: the same image on every machine).
+void AddWhiteNoise(std::vector<float>* v, double sigma, uint64_t state) {
+  auto uniform = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return ((state >> 11) + 0.5) / 9007199254740992.0;
+  };
+  for (float& x : *v) x += static_cast<float>(sigma * std::sqrt(-2 * std::log(uniform())) * std::cos(2 * M_PI * uniform()));
+}
+
+// Trail mode on a bright-star image: dashes up to 18 px, single images (no pair fits).
+StarDetectorOptions TrailModeOptions(double psf_sigma_px) {
+  StarDetectorOptions o;
+  o.dark = false;
+  o.psf_fwhm_px = 2.3548 * psf_sigma_px;
+  o.max_dash_length_px = 18.0;
+  o.pair_chi2_gain = 1e12;
+  return o;
+}
+
 // Trail mode on a synthetic image (Gaussian PSF, sigma 1 px, swept uniformly along segments,
 // integrated over each pixel by 8 x 8 sub-samples, white noise): runs of three 30 s-spaced dashes
 // (gaps half a dash long), each followed 10 s after the last by a faint 0.6 s dot on its wing, are
@@ -344,22 +385,7 @@ TEST(StarDetectorTest, TrailModeMeasuresDashesAndKeepsLinesDefects) {
   const double noise = 10.0, psf_sigma = 1.0;
   std::vector<float> v(static_cast<size_t>(w * h), 1000.0f);
   auto add = [&](double cx, double cy, double length, double angle, double flux, double sigma) {
-    const double c = std::cos(angle), sn = std::sin(angle);
-    const int reach = static_cast<int>(0.5 * length + 5 * sigma) + 2;
-    for (long y = std::lround(cy) - reach; y <= std::lround(cy) + reach; ++y)
-      for (long x = std::lround(cx) - reach; x <= std::lround(cx) + reach; ++x) {
-        double sum = 0;
-        for (int j = 0; j < 8; ++j)
-          for (int i = 0; i < 8; ++i) {
-            const double du = x - 0.5 + (i + 0.5) / 8 - cx, dv = y - 0.5 + (j + 0.5) / 8 - cy;
-            const double a = du * c + dv * sn, b = -du * sn + dv * c, hl = 0.5 * length;
-            const double along = length > 0 ? 0.5 * (std::erf((a + hl) / (std::sqrt(2.0) * sigma)) -
-                                                     std::erf((a - hl) / (std::sqrt(2.0) * sigma))) / length
-                                            : std::exp(-0.5 * a * a / (sigma * sigma)) / (std::sqrt(2 * M_PI) * sigma);
-            sum += along * std::exp(-0.5 * b * b / (sigma * sigma)) / (std::sqrt(2 * M_PI) * sigma);
-          }
-        v[static_cast<size_t>(y * w + x)] += static_cast<float>(flux * sum / 64.0);
-      }
+    AddSweptImage(&v, w, cx, cy, length, angle, flux, sigma);
   };
   struct Truth {
     double x, y, length;
@@ -383,18 +409,9 @@ TEST(StarDetectorTest, TrailModeMeasuresDashesAndKeepsLinesDefects) {
   add(200.0, 200.0, 72.0, 0.5, 400000.0, psf_sigma);  // a line (scratch)
   add(80.0, 230.0, 0.0, 0.0, 60000.0, 3.0);          // a blob (dust)
   add(330.0, 220.0, 14.0, -0.4, 60000.0, 3.0);       // a wide streak
-  uint64_t state = 12345;
-  auto uniform = [&state] {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return ((state >> 11) + 0.5) / 9007199254740992.0;
-  };
-  for (float& x : v) x += static_cast<float>(noise * std::sqrt(-2 * std::log(uniform())) * std::cos(2 * M_PI * uniform()));
+  AddWhiteNoise(&v, noise, 12345);
 
-  StarDetectorOptions o;
-  o.dark = false;
-  o.psf_fwhm_px = 2.3548 * psf_sigma;
-  o.max_dash_length_px = 18.0;
-  o.pair_chi2_gain = 1e12;
+  const StarDetectorOptions o = TrailModeOptions(psf_sigma);
   const std::vector<DetectedStar> found = DetectStarsInBuffer(v.data(), w, h, 65535.0, o);
   auto nearest = [&](double x, double y, double r) -> const DetectedStar* {
     const DetectedStar* best = nullptr;
@@ -449,6 +466,36 @@ TEST(StarDetectorTest, TrailModeMeasuresDashesAndKeepsLinesDefects) {
       if (t.length >= 10 && std::hypot(f.point.position_px.x_px - t.x, f.point.position_px.y_px - t.y) < 1.0) {
         EXPECT_NE(f.point.status, PointStatus::kMeasured) << "dash of " << t.length << " px measured without trail mode";
       }
+}
+
+// Trail mode: a clump of crossing images (two 16 px dashes crossing: not line-like, once kept whole and
+// rejected) is deblended too; a dot on the end of one arm comes out measured at its place, flagged crowded
+// (its clump may cut a dash into parts: the linker must know), and the crossing itself is no star.
+TEST(StarDetectorTest, TrailModeDeblendsClumpsAndFlagsTheirPiecesCrowded) {
+  const long w = 160, h = 120;
+  std::vector<float> v(static_cast<size_t>(w * h), 1000.0f);
+  const double psf_sigma = 1.0, cx = 70.3, cy = 60.6, arm = 0.5;
+  AddSweptImage(&v, w, cx, cy, 16.0, arm, 60000.0, psf_sigma);
+  AddSweptImage(&v, w, cx, cy, 16.0, -0.8, 60000.0, psf_sigma);
+  const double dot_x = cx + 13.0 * std::cos(arm), dot_y = cy + 13.0 * std::sin(arm);  // 5 px past the arm's end
+  AddSweptImage(&v, w, dot_x, dot_y, 0.0, 0.0, 6000.0, psf_sigma);
+  AddWhiteNoise(&v, 10.0, 777);
+  const StarDetectorOptions o = TrailModeOptions(psf_sigma);
+  const std::vector<DetectedStar> found = DetectStarsInBuffer(v.data(), w, h, 65535.0, o);
+  const DetectedStar* dot = nullptr;
+  for (const DetectedStar& f : found) {
+    const double to_dot = std::hypot(f.point.position_px.x_px - dot_x, f.point.position_px.y_px - dot_y);
+    if (to_dot < 1.0) {
+      dot = &f;
+    } else if (std::hypot(f.point.position_px.x_px - cx, f.point.position_px.y_px - cy) < 9.0) {
+      EXPECT_NE(f.point.status, PointStatus::kMeasured) << "the crossing measured as a star";
+    }
+  }
+  ASSERT_TRUE(dot) << "the dot beside the crossing not found";
+  EXPECT_EQ(dot->point.status, PointStatus::kMeasured);
+  EXPECT_TRUE(dot->flags & kStarCrowded) << StarFlagNames(dot->flags);
+  EXPECT_LT(std::hypot(dot->point.position_px.x_px - dot_x, dot->point.position_px.y_px - dot_y),
+            0.1 + 4.0 * std::hypot(dot->point.sigma_x_px, dot->point.sigma_y_px));
 }
 
 TEST(StarDetectorTest, InvalidOptionsThrow) {

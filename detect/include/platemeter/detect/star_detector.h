@@ -33,6 +33,8 @@ enum StarFlag : unsigned {
   kStarTruncated = 1u << 2,   // fit window cut by the image edge
   kStarElongated = 1u << 3,   // ellipticity above the limit (dash, trail, double)
   kStarDefect = 1u << 4,      // shape far from the PSF, line- or cross-like, or masked: not a star
+  kStarCrowded = 1u << 5,     // trail mode: cut from a clump of images too long or too wide for one
+                              // trail image (crossing trails); parts of one image may be measured apart
 };
 // "saturated,blended,..." (empty for none).
 std::string StarFlagNames(unsigned flags);

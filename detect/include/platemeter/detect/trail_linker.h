@@ -178,6 +178,7 @@ struct TrailChain {
   int bad_images = 0;              // images flagged bad by the track fit
   int missed_exposures = 0;        // exposures of the trail's span without an image taken
   std::string reason;              // empty if decoded, else why refused
+  std::string decoded_by;          // the step that found it: run, sibling, separators, flow, lone
 };
 
 // The trails of one star (same diurnal arc, one after another).

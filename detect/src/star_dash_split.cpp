@@ -80,8 +80,10 @@ std::vector<Component> SplitComponents(cv::Mat* labels, const cv::Mat& filtered,
   std::vector<Component> out;
   for (size_t ci = 0; ci < in.size(); ++ci) {
     const Component& c = in[ci];
+    Component whole = c;  // not cut: no clump's piece
+    whole.crowded = false;
     if (std::max(c.width, c.height) <= min_long_side_px) {
-      out.push_back(c);
+      out.push_back(whole);
       continue;
     }
     std::vector<int> pix;
@@ -96,7 +98,7 @@ std::vector<Component> SplitComponents(cv::Mat* labels, const cv::Mat& filtered,
         }
     const float low = std::max(threshold[ci], 1e-6f);
     if (!(peak > low)) {
-      out.push_back(c);
+      out.push_back(whole);
       continue;
     }
     Deblender d{*labels, filtered, c, {}, min_piece_area, min_contrast * total, min_rise[ci],
@@ -105,7 +107,7 @@ std::vector<Component> SplitComponents(cv::Mat* labels, const cv::Mat& filtered,
     std::vector<std::vector<int>> leaves;
     d.Split(pix, 0, &leaves);
     if (leaves.size() < 2) {
-      out.push_back(c);
+      out.push_back(whole);
       continue;
     }
     // Flood the component's other pixels from the leaves (breadth first: nearest leaf wins).
@@ -129,8 +131,11 @@ std::vector<Component> SplitComponents(cv::Mat* labels, const cv::Mat& filtered,
     const size_t n = leaves.size();
     std::vector<Component> parts(n);
     std::vector<int> x0(n, 1 << 30), y0(n, 1 << 30), x1(n, -1), y1(n, -1);
-    for (size_t k = 0; k < n; ++k)
-      parts[k].label = k == 0 ? c.label : (*next_label)++, parts[k].crowded = c.crowded, parts[k].clump = c.clump;
+    for (size_t k = 0; k < n; ++k) {
+      parts[k].label = k == 0 ? c.label : (*next_label)++;
+      parts[k].crowded = c.crowded;
+      parts[k].clump = c.clump;
+    }
     for (int y = 0; y < c.height; ++y)
       for (int x = 0; x < c.width; ++x) {
         const int k = owner.at<int>(y, x);

@@ -316,6 +316,7 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
       const bool cross_like = blob && c.area < 0.3 * c.width * c.height;
       c.crowded = too_long || blob;
       if (!too_long && cross_like) {  // a reseau cross's arms would pass as dashes
+        c.crowded = false;
         whole.push_back(c);
       } else {
         split.push_back(c), split_level.push_back(level[k]), split_rise.push_back(rise[k]);
@@ -497,12 +498,16 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
     }
   });
   // A clump still holding a line after deblending holds a scratch: its other pieces are parts of it, or of
-  // what it crosses (a reseau cross's arms, cut from it, pass as dashes): all rejected as the line.
+  // what it crosses (a reseau cross's arms, cut from it, pass as dashes): all rejected as the line. (A piece
+  // too long for its box is seen in every band; a segment fitted too long only in the band of its peak.)
   std::set<int> line_clumps;
-  for (size_t ci = 0; ci < components.size(); ++ci)
-    if (components[ci].crowded)
-      for (const DetectedStar& d : found[ci])
-        if (d.point.reason == "line") line_clumps.insert(components[ci].clump);
+  for (size_t ci = 0; ci < components.size(); ++ci) {
+    const Component& cc = components[ci];
+    if (!cc.crowded) continue;
+    if (std::max(cc.width, cc.height) > line_box_px) line_clumps.insert(cc.clump);
+    for (const DetectedStar& d : found[ci])
+      if (d.point.reason == "line") line_clumps.insert(cc.clump);
+  }
   for (size_t ci = 0; ci < components.size(); ++ci) {
     if (!components[ci].crowded) continue;
     for (DetectedStar& d : found[ci]) {

@@ -91,7 +91,8 @@ struct Component {
   int label = 0;
   int x = 0, y = 0, width = 0, height = 0;
   int area = 0;
-  bool crowded = false;  // trail mode: a clump too long or too wide for one trail image (pieces inherit it)
+  bool crowded = false;  // trail mode: a clump too long or too wide for one trail image; SplitComponents
+                         // keeps it on the pieces it cuts such a clump into, clears it on what it leaves whole
   int clump = 0;         // the label of the component a piece was cut from (its own label if not cut)
 };
 

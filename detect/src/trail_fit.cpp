@@ -77,7 +77,7 @@ void Track::LeverageAt(double t_s, double sigma_x_px, double sigma_y_px, double*
   *h_y = std::clamp(b.dot(cov_y_ * b) / (sigma_y_px * sigma_y_px), 0.0, 0.999);
 }
 
-PixelPoint FitSigmaPx(const TrailOptions& o, const DetectedStar& d) {
+FitSigma FitSigmaOf(const TrailOptions& o, const DetectedStar& d) {
   return {std::hypot(d.point.sigma_x_px > 0 ? d.point.sigma_x_px : 0.05, o.position_floor_px),
           std::hypot(d.point.sigma_y_px > 0 ? d.point.sigma_y_px : 0.05, o.position_floor_px)};
 }
@@ -93,7 +93,7 @@ bool FitTrackOf(const Context& c, const std::vector<std::pair<int, int>>& taken,
   std::vector<double> t, sx, sy;
   std::vector<PixelPoint> p;
   for (int i : ids) {
-    const PixelPoint s = FitSigmaPx(c.o, c.images[i]);
+    const FitSigma s = FitSigmaOf(c.o, c.images[i]);
     t.push_back(time_s(i)), p.push_back(c.p[i]), sx.push_back(s.x_px), sy.push_back(s.y_px);
   }
   return track->Fit(t, p, sx, sy, DegreeFor(static_cast<int>(t.size()), t.back() - t.front(), c.o.track_degree));

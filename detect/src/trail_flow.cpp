@@ -107,28 +107,38 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   // and at most 2 dots of any other (docs/trails.md, "The plate's flow": the schedule's own shifts), except
   // the two readings 120 s off, which line up 8 dots of every trail (and so are always candidates).
   struct Evidence {
-    int first = 0, second_images = 0, second_dots = 0;
+    int first = 0, second_images = 0, second_dots = 0;  // evidence (IsEvidence; a second trail with a dash)
+    int any_first = 0, any_second_dots = 0;             // every image taken (the ambiguity test's candidates)
   };
   // A second trail must show a dash of its own (a separator: the brightest images of its program): a
   // group of evenly spaced dots of another star on nearly the same diurnal arc, at the place of a
   // neighbouring trail under a reading shifted by a break, lines up with no dash (whole plate: a lone
   // trail read under the next number so, 15 wrong tags).
   auto evidence = [&](const FlowStar& s) {
-    std::vector<int> images(s.taken.size(), 0), dots(s.taken.size(), 0), dashes(s.taken.size(), 0);
-    for (size_t t = 0; t < s.taken.size(); ++t)
+    const size_t n = s.taken.size();
+    std::vector<int> images(n, 0), dots(n, 0), dashes(n, 0), any_dots(n, 0);
+    for (size_t t = 0; t < n; ++t)
       for (const auto& [j, i] : s.taken[t]) {
+        const bool dot = c.per_trail[t][j].kind == ExposureKind::kDot;
+        any_dots[t] += dot;
         if (!IsEvidence(c, i)) continue;
         ++images[t];
-        (c.per_trail[t][j].kind == ExposureKind::kDot ? dots : dashes)[t]++;
+        (dot ? dots : dashes)[t]++;
       }
-    const int top = static_cast<int>(std::max_element(images.begin(), images.end()) - images.begin());
     Evidence ev;
+    const int top = static_cast<int>(std::max_element(images.begin(), images.end()) - images.begin());
     ev.first = images[top];
-    for (size_t t = 0; t < s.taken.size(); ++t) {
+    for (size_t t = 0; t < n; ++t) {
       if (static_cast<int>(t) == top || dashes[t] < 1) continue;
       if (dots[t] > ev.second_dots || (dots[t] == ev.second_dots && images[t] > ev.second_images))
         ev.second_dots = dots[t], ev.second_images = images[t];
     }
+    int any_top = 0;
+    for (size_t t = 0; t < n; ++t)
+      if (s.taken[t].size() > s.taken[any_top].size()) any_top = static_cast<int>(t);
+    ev.any_first = static_cast<int>(s.taken[any_top].size());
+    for (size_t t = 0; t < n; ++t)
+      if (static_cast<int>(t) != any_top) ev.any_second_dots = std::max(ev.any_second_dots, any_dots[t]);
     return ev;
   };
   // Decoded: a trail of flow_min_images and a second one holding more dots than a wrong reading lines up.
@@ -152,7 +162,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       // The dash itself must be taken as that exposure (alone within the tolerance).
       bool self = false;
       for (const auto& [j, i] : s.taken[e.trail - 1]) self |= i == dash && c.per_trail[e.trail - 1][j].mid_s == e.mid_s;
-      const bool candidate = ev.first >= kCandidateFirst && ev.second_dots >= kCandidateDots;
+      const bool candidate = ev.any_first >= kCandidateFirst && ev.any_second_dots >= kCandidateDots;
       const bool decoded = self && ev.first >= need_first && ev.second_dots >= need_second_dots;
       readings += candidate || decoded;
       if (!decoded) continue;

@@ -116,14 +116,14 @@ inline bool CouldHoldDash(const DetectedStar& d, double dash_flux, double dash_l
 // Whether the images near a place may hold a dash between them: one that could on its own, or pieces fainter
 // than half of it whose fluxes add up to half of it (the deblender may cut a dash crossed by other images).
 struct DashHolder {
-  double dash_flux, dash_length;
+  double dash_flux_dn = 0, dash_length_px = 0;
   double faint_flux_dn = 0;
   bool held = false;
   void Add(const DetectedStar& d) {
-    if (CouldHoldDash(d, dash_flux, dash_length)) held = true;
+    if (CouldHoldDash(d, dash_flux_dn, dash_length_px)) held = true;
     else faint_flux_dn += d.flux_dn;
   }
-  bool Holds() const { return held || faint_flux_dn >= 0.5 * dash_flux; }
+  bool Holds() const { return held || (faint_flux_dn > 0 && faint_flux_dn >= 0.5 * dash_flux_dn); }
 };
 
 // Whether nothing could hold a dash of this flux, duration_s of motion long, predicted at q (within tol_px)
@@ -131,7 +131,7 @@ struct DashHolder {
 // FWHM along the motion and 1.5 FWHM across it (a neighbouring star's parallel trail, a few FWHM aside,
 // holds none of it), and no rejected line reaching there.
 bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, const PixelPoint& velocity_px_per_s,
-                    double dash_flux, double duration_s, double tol_px);
+                    double dash_flux_dn, double duration_s, double tol_px);
 
 // Whether a point image (length 0) may be an exposure expected expect_px long: the detector sees no sweep
 // under about one FWHM in its thresholded moments, which run short, so a swept image of up to two FWHM (a
@@ -156,10 +156,13 @@ ProgramCover CoverOf(const Context& c, const std::vector<std::vector<std::pair<i
 int DegreeFor(int n, double span_s, int max_degree);
 
 // An image's position sigmas in a track fit: its formal ones (0.05 px if unknown) with position_floor_px.
-PixelPoint FitSigmaPx(const TrailOptions& o, const DetectedStar& d);
+struct FitSigma {
+  double x_px = 0, y_px = 0;
+};
+FitSigma FitSigmaOf(const TrailOptions& o, const DetectedStar& d);
 
 // The track of a trail's images (exposure, image) at their mid times (time_s(image)) whose `use` is true,
-// weighted by FitSigmaPx; false when fewer than `min_images` or singular.
+// weighted by FitSigmaOf; false when fewer than `min_images` or singular.
 bool FitTrackOf(const Context& c, const std::vector<std::pair<int, int>>& taken,
                 const std::function<double(int)>& time_s, const std::function<bool(int)>& use, size_t min_images,
                 Track* track);

@@ -56,7 +56,6 @@ std::string TrailLinkResult::Summary() const {
 namespace {
 
 using trail_internal::Compatible;
-using trail_internal::CouldHoldDash;
 using trail_internal::Context;
 using trail_internal::DegreeFor;
 using trail_internal::Dist;
@@ -186,7 +185,7 @@ bool FitTrail(const Context& c, const std::vector<std::pair<int, int>>& taken, T
     const DetectedStar& d = c.images[i];
     t[k] = (*out)[i].mid_s;
     p[k] = c.p[i];
-    const PixelPoint sigma = trail_internal::FitSigmaPx(o, d);
+    const trail_internal::FitSigma sigma = trail_internal::FitSigmaOf(o, d);
     sx[k] = sigma.x_px, sy[k] = sigma.y_px;
   }
   Track track;
@@ -492,7 +491,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       // cannot be checked.
       const auto shared = [&](int i) { return (images[i].flags & kStarCrowded) && (images[i].flags & kStarBlended); };
       trail_internal::Track own;
-      const bool own_fitted = trail_internal::FitTrackOf(
+      const bool any_shared = std::any_of(kept.begin(), kept.end(), [&](const std::pair<int, int>& ji) { return shared(ji.second); });
+      const bool own_fitted = any_shared && trail_internal::FitTrackOf(
           c, kept, [&](int i) { return result.images[i].mid_s; }, [&](int i) { return !shared(i) && !result.images[i].bad; },
           6, &own);
       {
@@ -527,7 +527,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
             });
           double hx = 0, hy = 0;
           if (!ti.bad) {
-            const PixelPoint sigma = trail_internal::FitSigmaPx(options, images[i]);
+            const trail_internal::FitSigma sigma = trail_internal::FitSigmaOf(options, images[i]);
             tracks[cid].LeverageAt(ti.mid_s, sigma.x_px, sigma.y_px, &hx, &hy);
           }
           const bool unverified = std::max(hx, hy) > options.max_leverage;
@@ -934,6 +934,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     check_joins();
     // Adds the trails of `star` holding enough images to the star of `root` (-1: a new star).
     auto add_star = [&](const trail_internal::FlowStar& star, double rate_px_per_s, int root) {
+      const bool new_star = root < 0;
       // (a decoded star's missing trail: its timing is the star's, its images need only be many enough for the fit)
       const int min_images = root >= 0 ? options.flow_min_sibling_images : options.flow_min_images;
       for (int s = 0; s < trails; ++s) {
@@ -941,7 +942,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         if (root >= 0 && (numbers[Root(parent, root)] >> s & 1)) continue;
         // A new star's trail shows its phase: a dash of its own (a reading shifted by one dot of a group, 40 s,
         // lines up the group's other dots but no dash: the separators fall between the dots).
-        if (root < 0 && std::none_of(star.taken[s].begin(), star.taken[s].end(), [&](const std::pair<int, int>& ji) {
+        if (new_star && std::none_of(star.taken[s].begin(), star.taken[s].end(), [&](const std::pair<int, int>& ji) {
               return c.per_trail[s][ji.first].kind == ExposureKind::kDash && trail_internal::IsEvidence(c, ji.second);
             }))
           continue;

@@ -470,7 +470,8 @@ TEST(StarDetectorTest, TrailModeMeasuresDashesAndKeepsLinesDefects) {
 
 // Trail mode: a clump of crossing images (two 16 px dashes crossing: not line-like, once kept whole and
 // rejected) is deblended too; a dot on the end of one arm comes out measured at its place, flagged crowded
-// (its clump may cut a dash into parts: the linker must know), and the crossing itself is no star.
+// (its clump may cut a dash into parts: the linker must know), and the crossing itself is no star. A bright
+// star alone, its component as wide, is not cut and not flagged.
 TEST(StarDetectorTest, TrailModeDeblendsClumpsAndFlagsTheirPiecesCrowded) {
   const long w = 160, h = 120;
   std::vector<float> v(static_cast<size_t>(w * h), 1000.0f);
@@ -479,6 +480,8 @@ TEST(StarDetectorTest, TrailModeDeblendsClumpsAndFlagsTheirPiecesCrowded) {
   AddSweptImage(&v, w, cx, cy, 16.0, -0.8, 60000.0, psf_sigma);
   const double dot_x = cx + 13.0 * std::cos(arm), dot_y = cy + 13.0 * std::sin(arm);  // 5 px past the arm's end
   AddSweptImage(&v, w, dot_x, dot_y, 0.0, 0.0, 6000.0, psf_sigma);
+  const double lone_x = 130.4, lone_y = 30.7;  // a bright star alone, its component as wide as a clump
+  AddSweptImage(&v, w, lone_x, lone_y, 0.0, 0.0, 400000.0, psf_sigma);
   AddWhiteNoise(&v, 10.0, 777);
   const StarDetectorOptions o = TrailModeOptions(psf_sigma);
   const std::vector<DetectedStar> found = DetectStarsInBuffer(v.data(), w, h, 65535.0, o);
@@ -491,6 +494,11 @@ TEST(StarDetectorTest, TrailModeDeblendsClumpsAndFlagsTheirPiecesCrowded) {
       EXPECT_NE(f.point.status, PointStatus::kMeasured) << "the crossing measured as a star";
     }
   }
+  for (const DetectedStar& f : found)
+    if (std::hypot(f.point.position_px.x_px - lone_x, f.point.position_px.y_px - lone_y) < 1.0) {
+      EXPECT_EQ(f.point.status, PointStatus::kMeasured);
+      EXPECT_FALSE(f.flags & kStarCrowded) << "a star alone flagged crowded";
+    }
   ASSERT_TRUE(dot) << "the dot beside the crossing not found";
   EXPECT_EQ(dot->point.status, PointStatus::kMeasured);
   EXPECT_TRUE(dot->flags & kStarCrowded) << StarFlagNames(dot->flags);

@@ -1,6 +1,7 @@
 #pragma once
 // Internals of the trail linker shared by its source files (not installed).
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <unordered_map>
@@ -108,9 +109,9 @@ void ForReaching(const Context& c, const Grid& all, const PixelPoint& q, double 
 // length: anything but an image measured fainter than half the dash and shorter than half of it
 // (another star's dot; a dash merged with another image measures at least the dash's flux). A piece of
 // a crowded clump always may: the deblender may have cut a dash into parts, each fainter than half.
-inline bool CouldHoldDash(const DetectedStar& d, double dash_flux, double dash_length) {
+inline bool CouldHoldDash(const DetectedStar& d, double dash_flux_dn, double dash_length_px) {
   return (d.flags & kStarCrowded) ||
-         !(dash_flux > 0 && d.flux_dn > 0 && d.flux_dn < 0.5 * dash_flux && d.length_px < 0.5 * dash_length);
+         !(dash_flux_dn > 0 && d.flux_dn > 0 && d.flux_dn < 0.5 * dash_flux_dn && d.length_px < 0.5 * dash_length_px);
 }
 
 // Whether the images near a place may hold a dash between them: one that could on its own, or pieces fainter
@@ -126,13 +127,6 @@ struct DashHolder {
   bool Holds() const { return held || (faint_flux_dn > 0 && faint_flux_dn >= 0.5 * dash_flux_dn); }
 };
 
-// Whether nothing could hold a dash of this flux, duration_s of motion long, predicted at q (within tol_px)
-// moving with this velocity: no detection, alone or with others (DashHolder), within half the dash and two
-// FWHM along the motion and 1.5 FWHM across it (a neighbouring star's parallel trail, a few FWHM aside,
-// holds none of it), and no rejected line reaching there.
-bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, const PixelPoint& velocity_px_per_s,
-                    double dash_flux_dn, double duration_s, double tol_px);
-
 // Whether a point image (length 0) may be an exposure expected expect_px long: the detector sees no sweep
 // under about one FWHM in its thresholded moments, which run short, so a swept image of up to two FWHM (a
 // slow star's 20 s dash) is often measured as a point.
@@ -143,6 +137,11 @@ inline bool PointMayBeSwept(const TrailOptions& o, double expect_px) { return ex
 // piece near almost any prediction (on the whole V <= 8 plate: 21 wrong tags from readings seeded by, or
 // lined up with, such pieces). They may still be taken once a reading is decided.
 inline bool IsEvidence(const Context& c, int i) { return !(c.images[i].flags & kStarCrowded); }
+// How many of these (exposure, image) pairs are evidence.
+inline int EvidenceCount(const Context& c, const std::vector<std::pair<int, int>>& taken) {
+  const auto evidence = [&](const std::pair<int, int>& ji) { return IsEvidence(c, ji.second); };
+  return static_cast<int>(std::count_if(taken.begin(), taken.end(), evidence));
+}
 
 // What a reading's images show of the program: dashes besides the seed, and distinct exposure durations
 // (a reading shifted by a dot group maps the dots onto other durations; the flux tolerance lets some through,

@@ -491,10 +491,12 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       // cannot be checked.
       const auto shared = [&](int i) { return (images[i].flags & kStarCrowded) && (images[i].flags & kStarBlended); };
       trail_internal::Track own;
-      const bool any_shared = std::any_of(kept.begin(), kept.end(), [&](const std::pair<int, int>& ji) { return shared(ji.second); });
-      const bool own_fitted = any_shared && trail_internal::FitTrackOf(
-          c, kept, [&](int i) { return result.images[i].mid_s; }, [&](int i) { return !shared(i) && !result.images[i].bad; },
-          6, &own);
+      const bool any_shared =
+          std::any_of(kept.begin(), kept.end(), [&](const std::pair<int, int>& ji) { return shared(ji.second); });
+      const bool own_fitted =
+          any_shared && trail_internal::FitTrackOf(
+                            c, kept, [&](int i) { return result.images[i].mid_s; },
+                            [&](int i) { return !shared(i) && !result.images[i].bad; }, 6, &own);
       {
         std::vector<std::pair<int, int>> good;
         tc.images.clear();
@@ -1011,7 +1013,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         trail_internal::LoneTrail lone;
         if (!trail_internal::DecodeLoneTrail(c, all, flow, dash, excluded, &lone)) continue;
         const PixelPoint v = flow.Velocity(c.p[dash]);
-        add_chain("lone", lone.trail, lone.taken, lone.flux_per_s, std::hypot(v.x_px, v.y_px), 0, options.flow_min_images);
+        add_chain("lone", lone.trail, lone.taken, lone.flux_per_s, std::hypot(v.x_px, v.y_px), 0,
+                  options.flow_min_images);
       }
     complete_stars();  // the new stars' trails short of flow_min_images in their reading
   };

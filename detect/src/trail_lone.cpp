@@ -94,8 +94,7 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   // Exactly one group with the images of a candidate.
   const Group* best = nullptr;
   for (const auto& [key, g] : groups) {
-    const long evidence = std::count_if(g.program.begin(), g.program.end(), [&](const auto& ki) { return IsEvidence(c, ki.second); });
-    if (evidence < kCandidateImages) continue;
+    if (EvidenceCount(c, g.program) < kCandidateImages) continue;
     if (best) return false;
     best = &g;
   }

@@ -84,6 +84,26 @@ bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int referenc
 
 namespace {
 
+// Whether nothing could hold a dash of this flux, duration_s of motion long, predicted at q (within tol_px)
+// moving with this velocity: no detection, alone or with others (DashHolder), within half the dash and two
+// FWHM along the motion and 1.5 FWHM across it (a neighbouring star's parallel trail, a few FWHM aside,
+// holds none of it), and no rejected line reaching there.
+bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, const PixelPoint& velocity_px_per_s,
+                    double dash_flux_dn, double duration_s, double tol_px) {
+  const TrailOptions& o = c.o;
+  const double speed = std::hypot(velocity_px_per_s.x_px, velocity_px_per_s.y_px);
+  if (!(speed > 0)) return false;
+  const double dash_length_px = speed * duration_s;
+  const double along_px = 0.5 * dash_length_px + 2.0 * o.psf_fwhm_px + tol_px, across_px = 1.5 * o.psf_fwhm_px + tol_px;
+  DashHolder holder{dash_flux_dn, dash_length_px};
+  ForReaching(c, all, q, along_px, [&](int i) {
+    const double dx = c.p[i].x_px - q.x_px, dy = c.p[i].y_px - q.y_px;
+    if (IsLine(c.images[i]) || std::abs(dx * velocity_px_per_s.y_px - dy * velocity_px_per_s.x_px) / speed <= across_px)
+      holder.Add(c.images[i]);
+  });
+  return !holder.Holds();
+}
+
 // Whether the trail's run refutes number u: a leading dash it did not take lies inside the format where
 // nothing could hold it (a trail of 2 leading dashes read as the last two of 5).
 bool RunRefutes(const Context& c, const Grid& all, const Track& track, const std::vector<std::pair<int, int>>& as_u,
@@ -96,8 +116,8 @@ bool RunRefutes(const Context& c, const Grid& all, const Track& track, const std
     const PixelPoint q = track.At(ex[j].mid_s);
     if (!Inside(o, q, o.edge_margin_px)) continue;
     const double tol_px = o.sibling_tolerance_px + o.sibling_tolerance_fraction * Dist(q, first);
-    if (DashPlaceEmpty(c, all, q, track.VelocityAt(ex[j].mid_s), flux_per_s * ex[j].duration_s, ex[j].duration_s, tol_px))
-      return true;
+    const PixelPoint v = track.VelocityAt(ex[j].mid_s);
+    if (DashPlaceEmpty(c, all, q, v, flux_per_s * ex[j].duration_s, ex[j].duration_s, tol_px)) return true;
   }
   return false;
 }
@@ -122,13 +142,20 @@ int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, 
     const int shift = leading_dashes[u] - leading_dashes[reference];
     std::vector<PixelPoint> ps;
     for (const auto& [j, i] : pt.taken)
-      if (j + shift >= 0) r.as_u.push_back({j + shift, i}), r.ts.push_back(c.per_trail[u][j + shift].mid_s), ps.push_back(c.p[i]);
-    r.fitted = r.ts.size() >= 4 && r.track.Fit(r.ts, ps, {}, {}, DegreeFor(static_cast<int>(r.ts.size()), r.ts.back() - r.ts.front(), o.track_degree));
+      if (j + shift >= 0) {
+        r.as_u.push_back({j + shift, i});
+        r.ts.push_back(c.per_trail[u][j + shift].mid_s);
+        ps.push_back(c.p[i]);
+      }
+    const double span_s = r.ts.empty() ? 0.0 : r.ts.back() - r.ts.front();
+    const int degree = DegreeFor(static_cast<int>(r.ts.size()), span_s, o.track_degree);
+    r.fitted = r.ts.size() >= 4 && r.track.Fit(r.ts, ps, {}, {}, degree);
     r.refuted = r.fitted && RunRefutes(c, all, r.track, r.as_u, u, pt.flux_per_s);
   }
   // The run tells only where some number's run is there: a trail whose leading dashes are all lost
   // without trace (none of it on the plate) is left to its siblings.
-  const bool runs_tell = std::any_of(readings.begin(), readings.end(), [](const Reading& r) { return r.fitted && !r.refuted; });
+  const bool runs_tell =
+      std::any_of(readings.begin(), readings.end(), [](const Reading& r) { return r.fitted && !r.refuted; });
   int best = -1, count = 0;
   for (int u = 0; u < trails; ++u) {
     const Reading& r = readings[u];
@@ -147,8 +174,7 @@ int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, 
       std::vector<std::pair<int, int>> sibling;
       const Growth g = GrowSibling(c, all, as_u, u, s, pt.flux_per_s, [&](int i) { return other_number(i, s); }, &sibling);
       // (evidence only: a crowded clump offers a piece near almost any prediction)
-      const long evidence = std::count_if(sibling.begin(), sibling.end(), [&](const auto& ji) { return IsEvidence(c, ji.second); });
-      if (g.after_run < o.min_exposures_after_run || evidence < o.min_exposures_after_run) continue;
+      if (g.after_run < o.min_exposures_after_run || EvidenceCount(c, sibling) < o.min_exposures_after_run) continue;
       // The sibling's own track: its images on it to their precision, and on one arc with the trail's.
       std::vector<double> st;
       std::vector<PixelPoint> sp;

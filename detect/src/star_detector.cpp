@@ -212,6 +212,7 @@ void MeasureSegment(const SweepMoments& m, const std::vector<FitPixel>& pixels, 
     // unlike a segment may run its length away (88636 px seen on a 6012 px scan).
     line.length_px = std::min(g.length_px, std::hypot(window.x1 - window.x0, window.y1 - window.y0));
     line.angle_deg = g.angle_rad * 180.0 / std::numbers::pi;
+    line.box_min_px = {window.x0, window.y0}, line.box_max_px = {window.x1, window.y1};
     result->push_back(line);
     return;
   }
@@ -361,6 +362,7 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
       // A line at the centre of its box, its extent the box's diagonal (what a trail linker asks it may hide).
       DetectedStar line = Defect(bx + 0.5 * (bw - 1), b.y0_abs + by + 0.5 * (bh - 1), "line");
       line.length_px = std::hypot(bw, bh);
+      line.box_min_px = {bx - 0.5, b.y0_abs + by - 0.5}, line.box_max_px = {bx + bw - 0.5, b.y0_abs + by + bh - 0.5};
       result.push_back(line);
       return;
     }
@@ -397,8 +399,17 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
       // A sweep clearly longer than the PSF: fitted as a segment (dash, long dot), not as a star.
       const SweepMoments m = ComponentSweep(pixels, labels, l, b.y0_abs);
       if (m.length_px > o.psf_fwhm_px) {
+        const size_t first = result.size();
         MeasureSegment(m, pixels, noise, psf_sigma, clipped > 0, truncated, o, mesh, b.y0_abs, sign,
                        {x0 - 0.5, x1 - 0.5, b.y0_abs + y0 - 0.5, b.y0_abs + y1 - 0.5}, &result);
+        // A line's box holds its whole component too (the fit window stops window_reach from the peak).
+        for (size_t k = first; k < result.size(); ++k) {
+          DetectedStar& d = result[k];
+          if (d.point.reason != "line") continue;
+          d.box_min_px = {std::min(d.box_min_px.x_px, bx - 0.5), std::min(d.box_min_px.y_px, b.y0_abs + by - 0.5)};
+          d.box_max_px = {std::max(d.box_max_px.x_px, bx + bw - 0.5),
+                          std::max(d.box_max_px.y_px, b.y0_abs + by + bh - 0.5)};
+        }
         return;
       }
     }

@@ -94,15 +94,26 @@ struct Context {
 
 inline bool IsLine(const DetectedStar& d) { return (d.flags & kStarDefect) && d.length_px > 0; }
 
-// Calls f(i) for every image within r of q, and for every rejected line that may reach that far (its centre
-// within r + half its extent): a dash merged into a line lies somewhere along it.
+// Whether a rejected line may reach within r of q: a dash merged into it lies somewhere on its pixels,
+// inside its box where the detector gave one (a line along the format's edge, 600 px long, reaches
+// 300 px into the format as a disk), else within half its length of its centre.
+inline bool LineReaches(const DetectedStar& line, const PixelPoint& q, double r) {
+  if (line.box_min_px.x_px <= line.box_max_px.x_px) {
+    const double dx = std::max({line.box_min_px.x_px - q.x_px, 0.0, q.x_px - line.box_max_px.x_px});
+    const double dy = std::max({line.box_min_px.y_px - q.y_px, 0.0, q.y_px - line.box_max_px.y_px});
+    return std::hypot(dx, dy) <= r;
+  }
+  return Dist(line.point.position_px, q) <= r + 0.5 * line.length_px;
+}
+
+// Calls f(i) for every image within r of q, and for every rejected line that may reach that far.
 template <class F>
 void ForReaching(const Context& c, const Grid& all, const PixelPoint& q, double r, F f) {
   all.Near(q.x_px, q.y_px, r, [&](int i) {
     if (!IsLine(c.images[i])) f(i);
   });
   for (int i : c.lines)
-    if (Dist(c.p[i], q) <= r + 0.5 * c.images[i].length_px) f(i);
+    if (LineReaches(c.images[i], q, r)) f(i);
 }
 
 // Whether a detection may hold (or be) a 20 s dash of a star whose dashes measure this flux and
@@ -116,16 +127,28 @@ inline bool CouldHoldDash(const DetectedStar& d, double dash_flux_dn, double das
 
 // Whether the images near a place may hold a dash between them: one that could on its own, or pieces fainter
 // than half of it whose fluxes add up to half of it (the deblender may cut a dash crossed by other images).
+// by_flux: by their fluxes added up (and any image without one, or a piece of a crowded clump, whose flux
+// the deblender may have given a neighbour), whatever their lengths -- for a dash whose flux is known to be
+// the star's (CouldHoldDash lets another star's dash of 2 % of it hold).
 struct DashHolder {
   double dash_flux_dn = 0, dash_length_px = 0;
   double faint_flux_dn = 0;
   bool held = false;
+  bool by_flux = false;
   void Add(const DetectedStar& d) {
-    if (CouldHoldDash(d, dash_flux_dn, dash_length_px)) held = true;
+    if (by_flux ? !(d.flux_dn > 0) || (d.flags & kStarCrowded) : CouldHoldDash(d, dash_flux_dn, dash_length_px))
+      held = true;
     else faint_flux_dn += d.flux_dn;
   }
   bool Holds() const { return held || (faint_flux_dn > 0 && faint_flux_dn >= 0.5 * dash_flux_dn); }
 };
+
+// Whether nothing could hold a dash of this flux, duration_s of motion long, predicted at q (within tol_px)
+// moving with this velocity: no detection, alone or with others (DashHolder), within half the dash and two
+// FWHM along the motion and 1.5 FWHM across it (a neighbouring star's parallel trail, a few FWHM aside,
+// holds none of it), and no rejected line reaching there. by_flux: DashHolder::by_flux.
+bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, const PixelPoint& velocity_px_per_s,
+                    double dash_flux_dn, double duration_s, double tol_px, bool by_flux = false);
 
 // Whether a point image (length 0) may be an exposure expected expect_px long: the detector sees no sweep
 // under about one FWHM in its thresholded moments, which run short, so a swept image of up to two FWHM (a
@@ -297,7 +320,10 @@ struct LoneTrail {
 // through; no rejected line). That count must be a trail's and the star's other trails must not prefer
 // another number; then flow_min_images images, 2 dashes besides the seed, 4 exposure durations. A slow star
 // (10 s of motion within 2 tolerances) is not decoded.
+// trail_of(i): the trail number (1..) image i is tagged with, 0 if none (entering trails: a place counts as
+// empty only where that trail was exposed, "Trails entering the format").
 bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int dash,
-                     const std::function<bool(int)>& excluded, LoneTrail* out);
+                     const std::function<bool(int)>& excluded, const std::function<int(int)>& trail_of,
+                     LoneTrail* out);
 
 }  // namespace platemeter::trail_internal

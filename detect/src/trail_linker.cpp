@@ -1011,7 +1011,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       for (int dash : seeds) {
         if (result.images[dash].chain >= 0) continue;
         trail_internal::LoneTrail lone;
-        if (!trail_internal::DecodeLoneTrail(c, all, flow, dash, excluded, &lone)) continue;
+        const auto trail_of = [&](int i) { return result.images[i].assigned ? result.images[i].trail : 0; };
+        if (!trail_internal::DecodeLoneTrail(c, all, flow, dash, excluded, trail_of, &lone)) continue;
         const PixelPoint v = flow.Velocity(c.p[dash]);
         add_chain("lone", lone.trail, lone.taken, lone.flux_per_s, std::hypot(v.x_px, v.y_px), 0,
                   options.flow_min_images);

@@ -32,11 +32,45 @@ constexpr int kOtherDashes = 2, kDurations = 4;
 // A slow star (10 s of motion within this many flow tolerances) is not decoded: readings shifted by 10 s land
 // on its own images. (Its run may merge: the merged explanation below counts it.)
 constexpr double kNotDecodedTolerances = 2.0;
+// An empty place of a trail counts where an image of that trail (any star's) is tagged within this.
+constexpr double kExposedRadius_px = 150.0;
+
+// Whether, under trail number u (the seed at seed_s of that trail), another trail of the star lies on the
+// format where nothing could hold it: at least two of its dashes' places inside the format along the flow,
+// at least two of them empty and at most one not (a crowd may put an image at one), by flux
+// (DashHolder::by_flux: the star's dashes measure alike). The flow predicts a place to flow_tolerance_px
+// over hundreds of pixels, so an empty place says the trail is not there.
+bool SiblingAbsent(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s, int u,
+                   double flux_per_s, const std::function<int(int)>& trail_of) {
+  const TrailOptions& o = c.o;
+  for (int s = 0; s < static_cast<int>(c.per_trail.size()); ++s) {
+    if (s == u) continue;
+    int inside = 0, empty = 0;
+    for (const ShutterExposure& e : c.per_trail[s]) {
+      if (e.kind != ExposureKind::kDash) continue;
+      const double dt = e.mid_s - seed_s;
+      if (!path.Covers(dt)) continue;
+      const PixelPoint q = path.At(dt);
+      if (!Inside(o, q, o.edge_margin_px)) continue;
+      ++inside;
+      // Only where trail s was exposed: another star's image of it tagged nearby (a cloud or a shutter fault
+      // during one trail empties its places on every star).
+      bool exposed = false;
+      all.Near(q.x_px, q.y_px, kExposedRadius_px, [&](int i) { exposed = exposed || trail_of(i) == s + 1; });
+      const double tol_px = o.flow_tolerance_px + o.flow_tolerance_fraction * Dist(q, p);
+      empty += exposed &&
+               DashPlaceEmpty(c, all, q, path.VelocityAt(dt), flux_per_s * e.duration_s, e.duration_s, tol_px, true);
+    }
+    if (inside >= 2 && empty >= std::max(2, inside - 1)) return true;
+  }
+  return false;
+}
 
 }  // namespace
 
 bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int dash,
-                     const std::function<bool(int)>& excluded, LoneTrail* out) {
+                     const std::function<bool(int)>& excluded, const std::function<int(int)>& trail_of,
+                     LoneTrail* out) {
   const TrailOptions& o = c.o;
   const DetectedStar& d = c.images[dash];
   const PixelPoint p = c.p[dash];
@@ -115,13 +149,19 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   std::vector<int> run;                         // the run's detections
   const double dash_flux = a_dash.duration_s * flux_per_s, dash_length = a_dash.duration_s * speed;
   int m = 0;
+  bool off_format = false;  // the run goes on beyond the format (or may)
   for (;;) {
     if (m > max_dashes) return false;
     int found_k = 0, found = -1, explanations = 0;
     for (int k = 1; m + k <= max_dashes + 1; ++k) {
       const double dt_first = last_dash_s - 30.0 * (m + k - 1);
-      if (!path.Covers(dt_first)) return false;
-      if (!Inside(o, path.At(dt_first), o.edge_margin_px)) return false;  // it may go on beyond the format
+      if (!path.Covers(dt_first) || !Inside(o, path.At(dt_first), o.edge_margin_px)) {
+        // Dash m's own place beyond the format: the run may go on there. Only a merge reaching beyond it:
+        // no such explanation, dash m is judged alone.
+        if (k == 1 && !o.flow_entering_trails) return false;
+        off_format = k == 1;
+        break;
+      }
       const double dt = last_dash_s - 30.0 * (m + 0.5 * (k - 1));
       const PixelPoint q = path.At(dt), vq = path.VelocityAt(dt);
       const double tol = o.flow_tolerance_px + o.flow_tolerance_fraction * Dist(q, p);
@@ -136,6 +176,7 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
       if (count > 1) return false;
       if (count == 1) ++explanations, found_k = k, found = image;
     }
+    if (off_format) break;
     if (explanations > 1) return false;
     if (explanations == 1) {
       if (found_k == 1) single[m] = found;
@@ -166,12 +207,32 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
     if (!empty || faint_flux_dn >= 0.5 * dash_flux) return false;
     break;
   }
-  // The run's length must be a trail's.
-  const int n = m;
+  // The run's length must be a trail's. A run going on beyond the format (m of its dashes seen: a trail
+  // entering the format) has no count: the number is the one of at least m dashes under which none of the
+  // star's other trails lies on the format where nothing is (the trails before it lie further back on its
+  // arc, those after it further on) -- exactly one.
   int trail = -1;
-  for (size_t t = 0; t < c.per_trail.size(); ++t)
-    if (FirstDot(c.per_trail[t]) == n) trail = static_cast<int>(t);
+  if (!off_format) {
+    for (size_t t = 0; t < c.per_trail.size(); ++t)
+      if (FirstDot(c.per_trail[t]) == m) trail = static_cast<int>(t);
+  } else {
+    // The star's dash flux from its faintest dash (seed or separator): a blend only adds flux, and too much
+    // would empty its other trails' places.
+    double dash_flux_dn = d.flux_dn;
+    for (const auto& [k, i] : best->program)
+      if (ex[k].kind == ExposureKind::kDash && IsEvidence(c, i) && c.images[i].flux_dn > 0)
+        dash_flux_dn = std::min(dash_flux_dn, c.images[i].flux_dn);
+    for (int u = 0; u < static_cast<int>(c.per_trail.size()); ++u) {
+      const int j = best->exposure + FirstDot(c.per_trail[u]) - first_dot;  // the seed's exposure in trail u
+      if (FirstDot(c.per_trail[u]) < m || j < 0 || j >= static_cast<int>(c.per_trail[u].size())) continue;
+      if (SiblingAbsent(c, all, path, p, c.per_trail[u][j].mid_s, u, dash_flux_dn / a_dash.duration_s, trail_of))
+        continue;
+      if (trail >= 0) return false;
+      trail = u;
+    }
+  }
   if (trail < 0) return false;
+  const int n = FirstDot(c.per_trail[trail]);  // the run's dashes, m of them seen (seen dash k: exposure n-1-k)
   // The star's other trails must not say another number.
   const auto own = best->sibling_dots.find(trail);
   const int own_dots = own == best->sibling_dots.end() ? 0 : own->second;
@@ -184,14 +245,17 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   out->trail = trail;
   out->flux_per_s = flux_per_s;
   out->taken.clear();
-  for (int k = n - 1; k >= 0; --k)
+  for (int k = m - 1; k >= 0; --k)
     if (single[k] >= 0) out->taken.push_back({n - 1 - k, single[k]});  // merged dashes are not tagged
   const int shift = n - first_dot;
   for (const auto& [k, i] : best->program) out->taken.push_back({k + shift, i});
   std::vector<std::vector<std::pair<int, int>>> per_trail(c.per_trail.size());
   per_trail[trail] = out->taken;
   const ProgramCover cover = CoverOf(c, per_trail, dash);
-  return static_cast<int>(out->taken.size()) >= o.flow_min_images && cover.other_dashes >= kOtherDashes &&
+  // (A trail entering the format shows its separators and at most the end of its run: one dash besides the
+  // seed suffices where its siblings' absence gave the number.)
+  const int other_dashes = off_format ? 1 : kOtherDashes;
+  return static_cast<int>(out->taken.size()) >= o.flow_min_images && cover.other_dashes >= other_dashes &&
          cover.durations >= kDurations;
 }
 

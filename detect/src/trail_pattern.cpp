@@ -84,26 +84,6 @@ bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int referenc
 
 namespace {
 
-// Whether nothing could hold a dash of this flux, duration_s of motion long, predicted at q (within tol_px)
-// moving with this velocity: no detection, alone or with others (DashHolder), within half the dash and two
-// FWHM along the motion and 1.5 FWHM across it (a neighbouring star's parallel trail, a few FWHM aside,
-// holds none of it), and no rejected line reaching there.
-bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, const PixelPoint& velocity_px_per_s,
-                    double dash_flux_dn, double duration_s, double tol_px) {
-  const TrailOptions& o = c.o;
-  const double speed = std::hypot(velocity_px_per_s.x_px, velocity_px_per_s.y_px);
-  if (!(speed > 0)) return false;
-  const double dash_length_px = speed * duration_s;
-  const double along_px = 0.5 * dash_length_px + 2.0 * o.psf_fwhm_px + tol_px, across_px = 1.5 * o.psf_fwhm_px + tol_px;
-  DashHolder holder{dash_flux_dn, dash_length_px};
-  ForReaching(c, all, q, along_px, [&](int i) {
-    const double dx = c.p[i].x_px - q.x_px, dy = c.p[i].y_px - q.y_px;
-    if (IsLine(c.images[i]) || std::abs(dx * velocity_px_per_s.y_px - dy * velocity_px_per_s.x_px) / speed <= across_px)
-      holder.Add(c.images[i]);
-  });
-  return !holder.Holds();
-}
-
 // Whether the trail's run refutes number u: a leading dash it did not take lies inside the format where
 // nothing could hold it (a trail of 2 leading dashes read as the last two of 5).
 bool RunRefutes(const Context& c, const Grid& all, const Track& track, const std::vector<std::pair<int, int>>& as_u,

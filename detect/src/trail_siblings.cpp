@@ -30,6 +30,23 @@ bool Inside(const TrailOptions& o, const PixelPoint& p, double margin_px) {
   return true;
 }
 
+bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, const PixelPoint& velocity_px_per_s,
+                    double dash_flux_dn, double duration_s, double tol_px, bool by_flux) {
+  const TrailOptions& o = c.o;
+  const double speed = std::hypot(velocity_px_per_s.x_px, velocity_px_per_s.y_px);
+  if (!(speed > 0)) return false;
+  const double dash_length_px = speed * duration_s;
+  const double along_px = 0.5 * dash_length_px + 2.0 * o.psf_fwhm_px + tol_px, across_px = 1.5 * o.psf_fwhm_px + tol_px;
+  DashHolder holder{dash_flux_dn, dash_length_px};
+  holder.by_flux = by_flux;
+  ForReaching(c, all, q, along_px, [&](int i) {
+    const double dx = c.p[i].x_px - q.x_px, dy = c.p[i].y_px - q.y_px;
+    if (IsLine(c.images[i]) || std::abs(dx * velocity_px_per_s.y_px - dy * velocity_px_per_s.x_px) / speed <= across_px)
+      holder.Add(c.images[i]);
+  });
+  return !holder.Holds();
+}
+
 bool OnOneArc(const TrailOptions& o, const Track& a, double a1_s, const Track& b, double b0_s) {
   const PixelPoint pa = a.At(b0_s), pb = b.At(b0_s), qa = a.At(a1_s), qb = b.At(a1_s);
   const double tol = o.join_tolerance_px + o.join_tolerance_fraction * Dist(pa, qa);

@@ -457,6 +457,16 @@ TEST(StarDetectorTest, TrailModeMeasuresDashesAndKeepsLinesDefects) {
   EXPECT_EQ(line->point.reason, "line");
   EXPECT_GT(line->length_px, 0.9 * 72.0);
   EXPECT_LT(line->length_px, 1.4 * 72.0);
+  // ... and the box of its pixels: both ends inside, no taller than the slanted segment and a few FWHM
+  // (a disk of half its length would reach 36 px above and below its centre).
+  for (const int side : {-1, 1}) {
+    const double x = 200.0 + side * 36.0 * std::cos(0.5), y = 200.0 + side * 36.0 * std::sin(0.5);
+    EXPECT_LE(line->box_min_px.x_px, x);
+    EXPECT_GE(line->box_max_px.x_px, x);
+    EXPECT_LE(line->box_min_px.y_px, y);
+    EXPECT_GE(line->box_max_px.y_px, y);
+  }
+  EXPECT_LT(line->box_max_px.y_px - line->box_min_px.y_px, 72.0 * std::sin(0.5) + 6.0 * o.psf_fwhm_px);
   // The same image without trail mode: the dashes are not stars either.
   StarDetectorOptions plain = o;
   plain.max_dash_length_px = 0.0;

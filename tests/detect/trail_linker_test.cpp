@@ -410,6 +410,52 @@ TEST(TrailLinker, APieceOfACrowdedClumpHoldsTheDashItMayBe) {
   }
 }
 
+// A rejected line reaches only its own pixels: a line along the scan's edge (the detector sees the
+// format's border as one, 600 px long and a few px wide) holds no dash 100 px inside the scan, where a
+// disk of half its length around its centre would (docs/trails.md, "Lines"). Here such lines run along
+// both edges of the band: tags as without them; the same lines without their box, fewer (a trail's run
+// within 300 px of one is "occupied" before its first dash).
+TEST(TrailLinker, ALineAlongTheEdgeHidesNothingBeyondItsBox) {
+  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
+    GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
+  const BandRun& b = Band();
+  auto right_tags = [&](const std::vector<DetectedStar>& found) {
+    const TrailLinkResult r = LinkTrails(found, DutyCycleScheduleOptions{}, b.options);
+    long right = 0, wrong = 0;
+    for (size_t i = 0; i < b.found.size(); ++i) {
+      if (!r.images[i].assigned) continue;
+      const bool ok = b.match[i] && TagsRight(r.images[i], *b.match[i]);
+      right += ok, wrong += !ok;
+    }
+    EXPECT_EQ(wrong, 0);
+    return right;
+  };
+  const double length_px = 600.0, width_px = 6.0;
+  auto with_lines = [&](bool boxed) {
+    std::vector<DetectedStar> found = b.found;  // the lines after the images: the same indices
+    for (const double y_px : {b.y0 + 3.0, b.y0 + b.h - 4.0})
+      for (double x_px = 0.5 * length_px; x_px < b.w; x_px += length_px) {
+        DetectedStar line;
+        line.point.kind = PointKind::kStar;
+        line.point.status = PointStatus::kRejected;
+        line.point.reason = "line";
+        line.point.position_px = {x_px, y_px};
+        line.flags = kStarDefect;
+        line.length_px = std::hypot(length_px, width_px);
+        if (boxed)
+          line.box_min_px = {x_px - 0.5 * length_px, y_px - 0.5 * width_px},
+          line.box_max_px = {x_px + 0.5 * length_px, y_px + 0.5 * width_px};
+        found.push_back(line);
+      }
+    return found;
+  };
+  const long plain = right_tags(b.found), boxed = right_tags(with_lines(true)), disks = right_tags(with_lines(false));
+  std::printf("[edge lines] right tags: %ld without lines, %ld with boxed lines, %ld with lines as disks\n", plain,
+              boxed, disks);
+  EXPECT_GE(boxed, plain * 99 / 100);
+  EXPECT_LT(disks + 10, boxed);  // 23 trail images fewer when written (docs/trails.md)
+}
+
 // The linker alone on the simulator's true images of a whole plate: every trail dot and dash as
 // a detection at its true pixel position plus 0.15 px of deterministic jitter, dashes flagged
 // elongated, every 13th dot missing, and a stray detection beside every 40th image.

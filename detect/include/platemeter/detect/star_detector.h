@@ -87,6 +87,9 @@ struct DetectedStar {
   double sigma_length_px = 0.0; // px; formal sigma of length_px
   double angle_deg = 0.0;       // deg; trail mode: direction of the segment from +x toward +y (row), -90..90
   unsigned flags = 0;           // StarFlag bits
+  // Trail mode, rejected lines: the box holding the line's pixels (a trail linker asks what it may hide;
+  // a line along the format's edge is hundreds of px long but a few wide). Empty (min > max) otherwise.
+  PixelPoint box_min_px{0.0, 0.0}, box_max_px{-1.0, -1.0};
 };
 
 struct StarDetectionStats {

@@ -127,6 +127,9 @@ struct TrailOptions {
   int flow_min_sibling_images = 6;     // images a decoded star's missing trail found along the flow must hold
   bool flow_lone_trails = true;        // a star with one trail on the format numbered by its run found along the
                                        // flow (not with require_joined: nothing else confirms the number)
+  bool flow_entering_trails = true;    // such a trail entering the format (its run beyond it) numbered by its other
+                                       // trails' absence: the one number under which none of them lies on the
+                                       // format where nothing is (docs/trails.md, "Trails entering the format")
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
   // beyond it (trail 3 minus one dash looks like a complete trail 2): the position one dash before
   // the run must lie inside by edge_margin_px, else the run is refused. Unset (max <= min):

@@ -82,7 +82,8 @@ MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const cali
   row.id = row.star_id + "-" + row.trail + (dot ? "-D" : "-L") + std::to_string(*row.dot);
   row.mid_time_utc = calib::FormatUtcIso8601(start_utc.PlusSeconds(t.mid_s), 3);
   char value[64];
-  std::snprintf(value, sizeof value, "track_residual_px=%.4f", t.residual_px);
+  std::snprintf(value, sizeof value, t.flow_checked ? "flow_residual_px=%.4f" : "track_residual_px=%.4f",
+                t.residual_px);
   row.flags.push_back(value);
   if (t.bad) {
     row.status = PointStatus::kRejected;
@@ -93,7 +94,7 @@ MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const cali
   row.flags.push_back(value);
   std::snprintf(value, sizeof value, "measured_y_px=%.4f", star.point.position_px.y_px);
   row.flags.push_back(value);
-  row.flags.push_back("track_fit");
+  row.flags.push_back(t.flow_checked ? "flow_check" : "track_fit");
   row.x_px = t.refined_px.x_px;
   row.y_px = t.refined_px.y_px;
   row.sigma_x_px = t.sigma_refined_x_px;

@@ -218,6 +218,17 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
               r.Summary().c_str());
   EXPECT_EQ(score.wrong, 0);
   EXPECT_GT(score.clean_dots, 2000);
+  // Images the track cannot check, checked by the flow: at their measured positions, within its tolerance.
+  long flow_checked = 0;
+  for (size_t k = 0; k < field->found.size(); ++k) {
+    const TrailImage& ti = r.images[k];
+    if (!ti.assigned || !ti.flow_checked) continue;
+    ++flow_checked;
+    EXPECT_EQ(ti.refined_px.x_px, field->found[k].point.position_px.x_px);
+    EXPECT_EQ(ti.refined_px.y_px, field->found[k].point.position_px.y_px);
+    EXPECT_LE(ti.residual_px, 1.0);
+  }
+  EXPECT_GT(flow_checked, 100);
   EXPECT_GE(score.right, score.clean_dots * 85 / 100);  // figures in docs/trails.md
   // The same field linked with some steps changed.
   auto rescored = [&](const char* what, const std::function<void(TrailOptions*)>& change) {
@@ -252,6 +263,11 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   const Score no_lone = rescored("without lone trails", [](TrailOptions* o) { o->flow_lone_trails = false; });
   EXPECT_EQ(no_lone.wrong, 0);
   EXPECT_LT(no_lone.right, score.right);
+  // Without the flow's check of the images beyond a long gap at a trail's end, fewer (docs/trails.md).
+  const Score no_ends = rescored("without the flow's check of trail ends",
+                                 [](TrailOptions* o) { o->flow_checks_trail_ends = false; });
+  EXPECT_EQ(no_ends.wrong, 0);
+  EXPECT_LT(no_ends.right, score.right);
 }
 
 // Stars with a single trail on the plate (as where the others leave the format): no sibling can number it,

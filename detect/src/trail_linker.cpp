@@ -425,12 +425,6 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   // 3. The sidereal fit and the crowded-field checks of one trail (images: (exposure, image)); false:
   // the trail is refused and its tags taken back.
   // A trail must keep min_images (0: its leading dashes + half of min_exposures_after_run).
-  // Images dropped as unverified (beyond a long gap at a trail's end: the track cannot check them): the
-  // plate's flow may (step 7).
-  struct Unverified {
-    int chain, exposure, image;
-  };
-  std::vector<Unverified> unverified_images;
   auto settle = [&](int cid, const std::vector<std::pair<int, int>>& taken, int min_images = 0) -> bool {
     TrailChain& tc = result.chains[cid];
     if (min_images <= 0) min_images = tc.leading_dashes + options.min_exposures_after_run / 2;
@@ -540,7 +534,6 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           }
           const bool unverified = std::max(hx, hy) > options.max_leverage;
           if (crowded || unverified) {
-            if (unverified && !crowded && !ti.bad) unverified_images.push_back({cid, j, i});
             (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
             if (ti.bad) --tc.bad_images;
             ti = TrailImage{};
@@ -1025,50 +1018,58 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
                   options.flow_min_images);
       }
     complete_stars();  // the new stars' trails short of flow_min_images in their reading
-    // Unverified images checked by the flow instead of the track: carried from the trail's image nearest in
-    // time (the track there), each must land within the flow's tolerance, alone, of a compatible image.
-    // Tagged with their measured positions (the track does not reach them).
-    for (const Unverified& u : options.flow_checks_trail_ends ? unverified_images : std::vector<Unverified>{}) {
-      const int k = u.chain, i = u.image;
-      if (!decoded(k) || result.images[i].chain >= 0) continue;
-      const std::vector<ShutterExposure>& ex = c.per_trail[result.chains[k].trail - 1];
-      const ShutterExposure& e = ex[u.exposure];
-      int nearest = -1;
-      bool held = false;
-      for (const auto& [j, o] : kept_of[k]) {
-        held = held || j == u.exposure;
-        if (!result.images[o].bad &&
-            (nearest < 0 || std::abs(ex[j].mid_s - e.mid_s) < std::abs(ex[nearest].mid_s - e.mid_s)))
-          nearest = j;
+    // Each decoded trail's exposures without an image, filled along the flow: carried from the trail's image
+    // nearest in time (the track there), an exposure's place must hold exactly one unassigned image within
+    // the flow's tolerance, compatible with it (length, flux) and no piece shared in a clump. Such images
+    // lie beyond the growth's reach (after exposures missed in a row, where a crossing star took the
+    // trail's images) or beyond the track's (a long gap at its end: "unverified"); the flow checks them.
+    // Tagged with their measured positions.
+    if (options.flow_fills_trails)
+      for (int k = 0; k < static_cast<int>(result.chains.size()); ++k) {
+        if (!decoded(k)) continue;
+        const std::vector<ShutterExposure>& ex = c.per_trail[result.chains[k].trail - 1];
+        // (beyond its first and last images only: a gap inside is the growth's and the track's to judge)
+        const auto [first_it, last_it] = std::minmax_element(kept_of[k].begin(), kept_of[k].end());
+        const int first = first_it->first, last = last_it->first;
+        for (int je = 0; je < static_cast<int>(ex.size()); ++je) {
+          if (je >= first && je <= last) continue;
+          const ShutterExposure& e = ex[je];
+          int nearest = -1;
+          for (const auto& [j, o] : kept_of[k])  // (the track's own images: it reaches them)
+            if (!result.images[o].bad && !result.images[o].flow_checked &&
+                (nearest < 0 || std::abs(ex[j].mid_s - e.mid_s) < std::abs(ex[nearest].mid_s - e.mid_s)))
+              nearest = j;
+          if (nearest < 0) break;
+          const double dt = e.mid_s - ex[nearest].mid_s;
+          const PixelPoint origin = tracks[k].At(ex[nearest].mid_s);
+          const FlowPath path(flow, origin, std::abs(dt) + 30.0);
+          if (!path.Covers(dt)) continue;
+          const PixelPoint q = path.At(dt);
+          const double tol_px = options.flow_tolerance_px + options.flow_tolerance_fraction * Dist(q, origin);
+          int near = 0, i = -1;
+          all.Near(q.x_px, q.y_px, tol_px, [&](int o) {
+            if (c.usable[o] && result.images[o].chain < 0) ++near, i = o;
+          });
+          const bool shared = i >= 0 && (images[i].flags & kStarCrowded) && (images[i].flags & kStarBlended);
+          if (near != 1 || shared || !trail_internal::Compatible(c, i, e, path.VelocityAt(dt), flux_of.at(k)))
+            continue;
+          TrailImage& ti = result.images[i];
+          ti = TrailImage{};
+          ti.chain = k, ti.assigned = true, ti.flow_checked = true, ti.trail = e.trail, ti.kind = e.kind;
+          ti.dot_index = e.dot_index, ti.dash_index = e.dash_index, ti.mid_s = e.mid_s;
+          ti.residual_x_px = c.p[i].x_px - q.x_px, ti.residual_y_px = c.p[i].y_px - q.y_px;
+          ti.residual_px = Dist(c.p[i], q);
+          ti.refined_px = c.p[i];
+          ti.sigma_refined_x_px = images[i].point.sigma_x_px, ti.sigma_refined_y_px = images[i].point.sigma_y_px;
+          (e.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
+          kept_of[k].push_back({je, i});
+          std::sort(kept_of[k].begin(), kept_of[k].end());
+          std::vector<int>& chain_images = result.chains[k].images;
+          chain_images.push_back(i);
+          std::sort(chain_images.begin(), chain_images.end(),
+                    [&](int a, int b) { return result.images[a].mid_s < result.images[b].mid_s; });
+        }
       }
-      if (held || nearest < 0) continue;
-      const double dt = e.mid_s - ex[nearest].mid_s;
-      const PixelPoint origin = tracks[k].At(ex[nearest].mid_s);
-      const FlowPath path(flow, origin, std::abs(dt) + 30.0);
-      if (!path.Covers(dt)) continue;
-      const PixelPoint q = path.At(dt);
-      const double tol_px = options.flow_tolerance_px + options.flow_tolerance_fraction * Dist(q, origin);
-      int near = 0;
-      all.Near(q.x_px, q.y_px, tol_px, [&](int o) { near += c.usable[o] && result.images[o].chain < 0; });
-      if (near != 1 || Dist(q, c.p[i]) > tol_px ||
-          !trail_internal::Compatible(c, i, e, path.VelocityAt(dt), flux_of.at(k)))
-        continue;
-      TrailImage& ti = result.images[i];
-      ti = TrailImage{};
-      ti.chain = k, ti.assigned = true, ti.flow_checked = true, ti.trail = e.trail, ti.kind = e.kind;
-      ti.dot_index = e.dot_index, ti.dash_index = e.dash_index, ti.mid_s = e.mid_s;
-      ti.residual_x_px = c.p[i].x_px - q.x_px, ti.residual_y_px = c.p[i].y_px - q.y_px;
-      ti.residual_px = Dist(c.p[i], q);
-      ti.refined_px = c.p[i];
-      ti.sigma_refined_x_px = images[i].point.sigma_x_px, ti.sigma_refined_y_px = images[i].point.sigma_y_px;
-      (e.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
-      kept_of[k].push_back({u.exposure, i});
-      std::sort(kept_of[k].begin(), kept_of[k].end());
-      std::vector<int>& chain_images = result.chains[k].images;
-      chain_images.push_back(i);
-      std::sort(chain_images.begin(), chain_images.end(),
-                [&](int a, int b) { return result.images[a].mid_s < result.images[b].mid_s; });
-    }
   };
   if (options.grow_siblings) GrowSiblings();
   if (options.pattern_trails) {

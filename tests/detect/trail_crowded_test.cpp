@@ -263,9 +263,9 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   const Score no_lone = rescored("without lone trails", [](TrailOptions* o) { o->flow_lone_trails = false; });
   EXPECT_EQ(no_lone.wrong, 0);
   EXPECT_LT(no_lone.right, score.right);
-  // Without the flow's check of the images beyond a long gap at a trail's end, fewer (docs/trails.md).
-  const Score no_ends = rescored("without the flow's check of trail ends",
-                                 [](TrailOptions* o) { o->flow_checks_trail_ends = false; });
+  // Without the decoded trails filled along the flow, fewer (docs/trails.md).
+  const Score no_ends = rescored("without the trails filled along the flow",
+                                 [](TrailOptions* o) { o->flow_fills_trails = false; });
   EXPECT_EQ(no_ends.wrong, 0);
   EXPECT_LT(no_ends.right, score.right);
 }

@@ -127,8 +127,9 @@ struct TrailOptions {
   int flow_min_sibling_images = 6;     // images a decoded star's missing trail found along the flow must hold
   bool flow_lone_trails = true;        // a star with one trail on the format numbered by its run found along the
                                        // flow (not with require_joined: nothing else confirms the number)
-  bool flow_checks_trail_ends = true;  // images beyond a long gap at a trail's end (the track cannot check them,
-                                       // "unverified") checked by the flow instead: within flow_tolerance_px
+  bool flow_fills_trails = true;       // each decoded trail's exposures beyond its first and last images filled
+                                       // along the flow (beyond the growth's or the track's reach): one compatible
+                                       // image within flow_tolerance_px, tagged at its measured position
   bool flow_entering_trails = true;    // such a trail entering the format (its run beyond it) numbered by its other
                                        // trails' absence: the one number under which none of them lies on the
                                        // format where nothing is (docs/trails.md, "Trails entering the format")
@@ -159,8 +160,8 @@ struct TrailImage {
   int dash_index = 0;              // 1.. for dashes (leading dashes first, then the separators)
   double mid_s = 0.0;              // s; mid-exposure, on the scale of DutyCycleScheduleOptions::start_s
   bool bad = false;                // assigned, but its position disagrees with the trail's track (outlier)
-  bool flow_checked = false;       // beyond the track's reach (a long gap at the trail's end), checked by the
-                                   // plate's flow: refined_px is its measured position, residual the flow's
+  bool flow_checked = false;       // found along the plate's flow beyond the growth's or the track's reach:
+                                   // refined_px is its measured position, residual the flow's
   double residual_x_px = 0.0;      // px; measured minus fitted track position (assigned images)
   double residual_y_px = 0.0;      // px
   double residual_px = 0.0;        // px; length of the residual

@@ -71,7 +71,8 @@ MeasuredPoint StarRow(const DetectedStar& star) {
 // A tagged trail image. Its position is the trail's fitted track at the
 // image's mid-exposure (docs/detect.md: correlated along the trail); the
 // direct measurement stays in the flags. A bad image (off the track) keeps
-// its measured position and is rejected.
+// its measured position and is rejected; one found along the plate's flow
+// beyond the track's images (flow_check) keeps its measured position.
 MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const calib::UtcInstant& start_utc) {
   MeasuredPoint row = StarRow(star);
   const bool dot = t.kind == ExposureKind::kDot;

@@ -473,7 +473,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     // A bad image, or one off the track by more than tight_tolerance_px, with other images around it
     // is likely another star's (a crowded field): not tagged ("off_track"). Alone, it is the trail's own
     // displaced image: tagged, flagged bad. An image the track merely follows (leverage above
-    // max_leverage: beyond a long gap at the trail's end) cannot be checked: not tagged ("unverified").
+    // max_leverage: beyond a long gap at the trail's end) cannot be checked: not tagged ("unverified"; the
+    // plate's flow may check it, step 7).
     bool refused = false;
     for (int pass = 0; pass < 3 && !refused; ++pass) {  // until nothing more is dropped
       if (pass > 0) {  // the residuals of the refitted track
@@ -1018,12 +1019,13 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
                   options.flow_min_images);
       }
     complete_stars();  // the new stars' trails short of flow_min_images in their reading
-    // Each decoded trail's exposures without an image, filled along the flow: carried from the trail's image
-    // nearest in time (the track there), an exposure's place must hold exactly one unassigned image within
-    // the flow's tolerance, compatible with it (length, flux) and no piece shared in a clump. Such images
-    // lie beyond the growth's reach (after exposures missed in a row, where a crossing star took the
-    // trail's images) or beyond the track's (a long gap at its end: "unverified"); the flow checks them.
-    // Tagged with their measured positions.
+    // Each decoded trail's exposures beyond its first and last images, filled along the flow: carried from
+    // the trail's image nearest in time (the track there), an exposure's place must hold exactly one image
+    // (assigned or not) within the flow's tolerance, unassigned, never refused by a check (only "unlinked"
+    // or "unverified"), compatible (length, flux) and no piece shared in a clump. Such images lie beyond the
+    // growth's reach (after exposures missed in a row, where a crossing star took the trail's images) or
+    // beyond the track's (a long gap at its end: "unverified"); the flow checks them. Tagged with their
+    // measured positions and sigmas (the fit's weights: FitSigmaOf).
     if (options.flow_fills_trails)
       for (int k = 0; k < static_cast<int>(result.chains.size()); ++k) {
         if (!decoded(k)) continue;
@@ -1048,10 +1050,13 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           const double tol_px = options.flow_tolerance_px + options.flow_tolerance_fraction * Dist(q, origin);
           int near = 0, i = -1;
           all.Near(q.x_px, q.y_px, tol_px, [&](int o) {
-            if (c.usable[o] && result.images[o].chain < 0) ++near, i = o;
+            if (c.usable[o]) ++near, i = o;
           });
-          const bool shared = i >= 0 && (images[i].flags & kStarCrowded) && (images[i].flags & kStarBlended);
-          if (near != 1 || shared || !trail_internal::Compatible(c, i, e, path.VelocityAt(dt), flux_of.at(k)))
+          if (near != 1 || result.images[i].chain >= 0) continue;
+          const std::string& why = result.images[i].reason;
+          const bool shared = (images[i].flags & kStarCrowded) && (images[i].flags & kStarBlended);
+          if ((why != "unlinked" && why != "unverified") || shared ||
+              !trail_internal::Compatible(c, i, e, path.VelocityAt(dt), flux_of.at(k)))
             continue;
           TrailImage& ti = result.images[i];
           ti = TrailImage{};
@@ -1060,7 +1065,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           ti.residual_x_px = c.p[i].x_px - q.x_px, ti.residual_y_px = c.p[i].y_px - q.y_px;
           ti.residual_px = Dist(c.p[i], q);
           ti.refined_px = c.p[i];
-          ti.sigma_refined_x_px = images[i].point.sigma_x_px, ti.sigma_refined_y_px = images[i].point.sigma_y_px;
+          const trail_internal::FitSigma sigma = trail_internal::FitSigmaOf(options, images[i]);
+          ti.sigma_refined_x_px = sigma.x_px, ti.sigma_refined_y_px = sigma.y_px;
           (e.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
           kept_of[k].push_back({je, i});
           std::sort(kept_of[k].begin(), kept_of[k].end());
@@ -1069,6 +1075,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           std::sort(chain_images.begin(), chain_images.end(),
                     [&](int a, int b) { return result.images[a].mid_s < result.images[b].mid_s; });
         }
+        const auto [lo, hi] = std::minmax_element(kept_of[k].begin(), kept_of[k].end());
+        result.chains[k].missed_exposures = hi->first - lo->first + 1 - static_cast<int>(kept_of[k].size());
       }
   };
   if (options.grow_siblings) GrowSiblings();

@@ -165,8 +165,9 @@ struct TrailImage {
   double residual_x_px = 0.0;      // px; measured minus fitted track position (assigned images)
   double residual_y_px = 0.0;      // px
   double residual_px = 0.0;        // px; length of the residual
-  PixelPoint refined_px;           // px; the fitted track at mid_s (assigned images)
-  double sigma_refined_x_px = 0.0; // px; formal sigma of refined_px (scaled by the fit's reduced chi^2 when > 1)
+  PixelPoint refined_px;           // px; the fitted track at mid_s (assigned images; flow_checked: measured)
+  double sigma_refined_x_px = 0.0; // px; formal sigma of refined_px (scaled by the fit's reduced chi^2 when > 1;
+                                   // flow_checked: the measured sigma with position_floor_px)
   double sigma_refined_y_px = 0.0; // px
   std::string reason;              // why not assigned: not_star, unlinked, at_edge, image_before_run,
                                    // short_pattern, ambiguous, contested, leading_dashes_incomplete,

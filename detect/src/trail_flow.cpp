@@ -63,7 +63,7 @@ FlowStar CollectAlongFlow(const Context& c, const Grid& all, const FlowPath& pat
       if (!path.Covers(dt)) continue;
       const PixelPoint q = path.At(dt);
       if (!Inside(o, q, 0.0)) continue;
-      const double tol = o.flow_tolerance_px + o.flow_tolerance_fraction * Dist(q, origin);
+      const double tol = FlowTolerance_px(o, q, origin);
       const PixelPoint v = path.VelocityAt(dt);
       int count = 0, image = -1;
       all.Near(q.x_px, q.y_px, tol, [&](int i) {

@@ -92,6 +92,12 @@ struct Context {
   std::vector<int> lines;  // rejected lines with an extent (defects with length_px > 0), for ForReaching
 };
 
+// How far from q an image predicted by the flow may lie, carried there from origin: the flow's error grows
+// with the distance carried.
+inline double FlowTolerance_px(const TrailOptions& o, const PixelPoint& q, const PixelPoint& origin) {
+  return o.flow_tolerance_px + o.flow_tolerance_fraction * Dist(q, origin);
+}
+
 inline bool IsLine(const DetectedStar& d) { return (d.flags & kStarDefect) && d.length_px > 0; }
 
 // Whether a rejected line may reach within r of q: a dash merged into it lies somewhere on its pixels,

@@ -249,6 +249,18 @@ bool FitTrail(const Context& c, const std::vector<std::pair<int, int>>& taken, T
   return true;
 }
 
+// Tags an image as exposure e of chain `chain` (its other fields untouched).
+void TagAs(TrailImage* ti, int chain, const ShutterExposure& e) {
+  ti->chain = chain;
+  ti->assigned = true;
+  ti->reason.clear();
+  ti->trail = e.trail;
+  ti->kind = e.kind;
+  ti->dot_index = e.dot_index;
+  ti->dash_index = e.dash_index;
+  ti->mid_s = e.mid_s;
+}
+
 // Union-find over chains.
 int Root(std::vector<int>& parent, int i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
@@ -439,16 +451,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       }
       kept.push_back({j, i});
       tc.images.push_back(i);
-      const ShutterExposure& s = ex[j];
-      ti.chain = cid;
-      ti.assigned = true;
-      ti.reason.clear();
-      ti.trail = s.trail;
-      ti.kind = s.kind;
-      ti.dot_index = s.dot_index;
-      ti.dash_index = s.dash_index;
-      ti.mid_s = s.mid_s;
-      (s.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
+      TagAs(&ti, cid, ex[j]);
+      (ex[j].kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
     }
     // 3. The sidereal fit (a trail left with too few images after the contested ones is refused).
     if (static_cast<int>(kept.size()) < min_images || !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
@@ -920,7 +924,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
             if (!path.Covers(dt)) continue;
             const PixelPoint q = path.At(dt);
             ++n;
-            on += Dist(q, c.p[i]) <= options.flow_tolerance_px + options.flow_tolerance_fraction * Dist(q, origin);
+            on += Dist(q, c.p[i]) <= trail_internal::FlowTolerance_px(options, q, origin);
           }
           if (2 * on < n) strays.push_back(k);
         }
@@ -1008,11 +1012,11 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     }
     // Lone trails: stars the loop above left undecided, numbered by their runs (nothing else confirms the
     // number: not with require_joined).
+    const auto trail_of = [&](int i) { return result.images[i].assigned ? result.images[i].trail : 0; };
     if (options.flow_lone_trails && !options.require_joined)
       for (int dash : seeds) {
         if (result.images[dash].chain >= 0) continue;
         trail_internal::LoneTrail lone;
-        const auto trail_of = [&](int i) { return result.images[i].assigned ? result.images[i].trail : 0; };
         if (!trail_internal::DecodeLoneTrail(c, all, flow, dash, excluded, trail_of, &lone)) continue;
         const PixelPoint v = flow.Velocity(c.p[dash]);
         add_chain("lone", lone.trail, lone.taken, lone.flux_per_s, std::hypot(v.x_px, v.y_px), 0,
@@ -1047,21 +1051,21 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           const FlowPath path(flow, origin, std::abs(dt) + 30.0);
           if (!path.Covers(dt)) continue;
           const PixelPoint q = path.At(dt);
-          const double tol_px = options.flow_tolerance_px + options.flow_tolerance_fraction * Dist(q, origin);
+          const double tol_px = trail_internal::FlowTolerance_px(options, q, origin);
           int near = 0, i = -1;
           all.Near(q.x_px, q.y_px, tol_px, [&](int o) {
             if (c.usable[o]) ++near, i = o;
           });
-          if (near != 1 || result.images[i].chain >= 0) continue;
-          const std::string& why = result.images[i].reason;
+          if (near != 1) continue;
+          const std::string& why = result.images[i].reason;  // (unassigned, and refused by no check)
           const bool shared = (images[i].flags & kStarCrowded) && (images[i].flags & kStarBlended);
           if ((why != "unlinked" && why != "unverified") || shared ||
               !trail_internal::Compatible(c, i, e, path.VelocityAt(dt), flux_of.at(k)))
             continue;
           TrailImage& ti = result.images[i];
           ti = TrailImage{};
-          ti.chain = k, ti.assigned = true, ti.flow_checked = true, ti.trail = e.trail, ti.kind = e.kind;
-          ti.dot_index = e.dot_index, ti.dash_index = e.dash_index, ti.mid_s = e.mid_s;
+          TagAs(&ti, k, e);
+          ti.flow_checked = true;
           ti.residual_x_px = c.p[i].x_px - q.x_px, ti.residual_y_px = c.p[i].y_px - q.y_px;
           ti.residual_px = Dist(c.p[i], q);
           ti.refined_px = c.p[i];

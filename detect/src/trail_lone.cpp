@@ -57,7 +57,7 @@ bool SiblingAbsent(const Context& c, const Grid& all, const FlowPath& path, cons
       // during one trail empties its places on every star).
       bool exposed = false;
       all.Near(q.x_px, q.y_px, kExposedRadius_px, [&](int i) { exposed = exposed || trail_of(i) == s + 1; });
-      const double tol_px = o.flow_tolerance_px + o.flow_tolerance_fraction * Dist(q, p);
+      const double tol_px = FlowTolerance_px(o, q, p);
       empty += exposed &&
                DashPlaceEmpty(c, all, q, path.VelocityAt(dt), flux_per_s * e.duration_s, e.duration_s, tol_px, true);
     }
@@ -164,7 +164,7 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
       }
       const double dt = last_dash_s - 30.0 * (m + 0.5 * (k - 1));
       const PixelPoint q = path.At(dt), vq = path.VelocityAt(dt);
-      const double tol = o.flow_tolerance_px + o.flow_tolerance_fraction * Dist(q, p);
+      const double tol = FlowTolerance_px(o, q, p);
       ShutterExposure merged = a_dash;
       merged.duration_s = a_dash.duration_s + 30.0 * (k - 1);  // the swept length
       const double merged_flux_per_s = flux_per_s * k * a_dash.duration_s / merged.duration_s;

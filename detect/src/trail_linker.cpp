@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <numbers>
 #include <numeric>
@@ -65,6 +66,9 @@ using trail_internal::Growth;
 using trail_internal::GrowSpec;
 using trail_internal::SiblingEvidence;
 using trail_internal::Track;
+
+// Images a decoded star's missing trail filled along the flow must hold (flow_fills_siblings).
+constexpr int kSiblingFillImages = 3;
 
 // With measured segments (trail-mode detection): a dash's run neighbours lie along its own direction
 // (angle_deg) at 1.5 of its length, with its length. Each side takes its one candidate; two or more
@@ -965,9 +969,10 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         parent[Root(parent, cid)] = r;
       }
     };
-    // Decoded stars' missing trails, each from the end of the star's trail nearest to it in time (the flow's
-    // error grows with the distance carried).
-    auto complete_stars = [&] {
+    // Each decoded star's missing trail s (fn(root, s, k, t_end, origin)), carried from the end (origin at
+    // t_end) of the star's decoded trail k nearest to it in time (the flow's error grows with the distance
+    // carried): nearest in number, the most images.
+    auto for_missing_trails = [&](const std::function<void(int, int, int, double, const PixelPoint&)>& fn) {
       std::map<int, std::vector<int>> trails_of;  // star root -> its decoded trails
       for (int k = 0; k < static_cast<int>(result.chains.size()); ++k)
         if (decoded(k)) trails_of[Root(parent, k)].push_back(k);
@@ -982,12 +987,17 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           double t0 = 0, t1 = 0;
           ends(k, &t0, &t1);
           const double t_end = s > result.chains[k].trail - 1 ? t1 : t0;
-          const PixelPoint origin = tracks[k].At(t_end);
-          const trail_internal::FlowStar star = trail_internal::CollectAlongFlow(
-              c, all, trail_internal::PlatePath(c, flow, origin), origin, t_end, flux_of.at(k), 1u << s, excluded);
-          const PixelPoint v = flow.Velocity(origin);
-          add_star(star, std::hypot(v.x_px, v.y_px), root);
+          fn(root, s, k, t_end, tracks[k].At(t_end));
         }
+    };
+    // Decoded stars' missing trails.
+    auto complete_stars = [&] {
+      for_missing_trails([&](int root, int s, int k, double t_end, const PixelPoint& origin) {
+        const trail_internal::FlowStar star = trail_internal::CollectAlongFlow(
+            c, all, trail_internal::PlatePath(c, flow, origin), origin, t_end, flux_of.at(k), 1u << s, excluded);
+        const PixelPoint v = flow.Velocity(origin);
+        add_star(star, std::hypot(v.x_px, v.y_px), root);
+      });
     };
     complete_stars();
     // Stars decoded from any of their dashes.
@@ -1023,13 +1033,56 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
                   options.flow_min_images);
       }
     complete_stars();  // the new stars' trails short of flow_min_images in their reading
+    // An exposure's place along the flow (q, carried from origin): exactly one image (assigned or not) within
+    // the flow's tolerance, unassigned, refused by no check but a track's ("unlinked", "unverified", or
+    // "off_track": 0.3 px off a track fitted among other stars' images -- the flow's place is a check of its
+    // own), compatible (length, flux) and no piece shared in a clump; -1 otherwise.
+    auto flow_place_image = [&](const FlowPath& path, double dt, const PixelPoint& origin, const ShutterExposure& e,
+                                double flux_per_s) {
+      const PixelPoint q = path.At(dt);
+      const double tol_px = trail_internal::FlowTolerance_px(options, q, origin);
+      int near = 0, i = -1;
+      all.Near(q.x_px, q.y_px, tol_px, [&](int o) {
+        if (c.usable[o]) ++near, i = o;
+      });
+      if (near != 1) return -1;
+      const std::string& why = result.images[i].reason;  // (unassigned, and refused by no check but a track's)
+      const bool shared = (images[i].flags & kStarCrowded) && (images[i].flags & kStarBlended);
+      if ((why != "unlinked" && why != "unverified" && why != "off_track") || shared ||
+          !trail_internal::Compatible(c, i, e, path.VelocityAt(dt), flux_per_s))
+        return -1;
+      return i;
+    };
+    // Image i tagged as exposure je of chain k, found along the flow at q: its measured position and sigmas
+    // (the fit's weights: FitSigmaOf).
+    auto tag_flow_checked = [&](int k, int je, int i, const PixelPoint& q) {
+      const ShutterExposure& e = c.per_trail[result.chains[k].trail - 1][je];
+      TrailImage& ti = result.images[i];
+      ti = TrailImage{};
+      TagAs(&ti, k, e);
+      ti.flow_checked = true;
+      ti.residual_x_px = c.p[i].x_px - q.x_px, ti.residual_y_px = c.p[i].y_px - q.y_px;
+      ti.residual_px = Dist(c.p[i], q);
+      ti.refined_px = c.p[i];
+      const trail_internal::FitSigma sigma = trail_internal::FitSigmaOf(options, images[i]);
+      ti.sigma_refined_x_px = sigma.x_px, ti.sigma_refined_y_px = sigma.y_px;
+      (e.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
+      kept_of[k].push_back({je, i});
+      std::sort(kept_of[k].begin(), kept_of[k].end());
+      std::vector<int>& chain_images = result.chains[k].images;
+      chain_images.push_back(i);
+      std::sort(chain_images.begin(), chain_images.end(),
+                [&](int a, int b) { return result.images[a].mid_s < result.images[b].mid_s; });
+    };
+    auto recount_missed = [&](int k) {
+      const auto [lo, hi] = std::minmax_element(kept_of[k].begin(), kept_of[k].end());
+      result.chains[k].missed_exposures = hi->first - lo->first + 1 - static_cast<int>(kept_of[k].size());
+    };
     // Each decoded trail's exposures beyond its first and last images, filled along the flow: carried from
-    // the trail's image nearest in time (the track there), an exposure's place must hold exactly one image
-    // (assigned or not) within the flow's tolerance, unassigned, never refused by a check (only "unlinked"
-    // or "unverified"), compatible (length, flux) and no piece shared in a clump. Such images lie beyond the
-    // growth's reach (after exposures missed in a row, where a crossing star took the trail's images) or
-    // beyond the track's (a long gap at its end: "unverified"); the flow checks them. Tagged with their
-    // measured positions and sigmas (the fit's weights: FitSigmaOf).
+    // the trail's image nearest in time (the track there), an exposure's place must hold one image as
+    // flow_place_image says. Such images lie beyond the growth's reach (after exposures missed in a row,
+    // where a crossing star took the trail's images) or beyond the track's (a long gap at its end:
+    // "unverified"); the flow checks them.
     if (options.flow_fills_trails)
       for (int k = 0; k < static_cast<int>(result.chains.size()); ++k) {
         if (!decoded(k)) continue;
@@ -1050,38 +1103,57 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           const PixelPoint origin = tracks[k].At(ex[nearest].mid_s);
           const FlowPath path(flow, origin, std::abs(dt) + 30.0);
           if (!path.Covers(dt)) continue;
+          const int i = flow_place_image(path, dt, origin, e, flux_of.at(k));
+          if (i >= 0) tag_flow_checked(k, je, i, path.At(dt));
+        }
+        recount_missed(k);
+      }
+    // A decoded star's trails still missing (too few images for a track of their own, or refused by its fit
+    // among other stars' images): each exposure's place carried along the flow from the end of the star's
+    // trail nearest in time, filled as above. At least kSiblingFillImages of them make the trail (a single
+    // image at the flow's tolerance may be a chance coincidence over the thousands of places tried). A slow
+    // star, whose exposures' places lie within two tolerances of each other, is left out.
+    if (options.flow_fills_siblings)
+      for_missing_trails([&](int root, int s, int k, double t_end, const PixelPoint& origin) {
+        const std::vector<ShutterExposure>& ex = c.per_trail[s];
+        const double reach_s = std::max(std::abs(ex.front().mid_s - t_end), std::abs(ex.back().mid_s - t_end));
+        const FlowPath path(flow, origin, reach_s + 30.0);
+        std::vector<std::pair<int, int>> found;
+        std::vector<PixelPoint> places;
+        for (int je = 0; je < static_cast<int>(ex.size()); ++je) {
+          const double dt = ex[je].mid_s - t_end;
+          if (!path.Covers(dt)) continue;
           const PixelPoint q = path.At(dt);
           const double tol_px = trail_internal::FlowTolerance_px(options, q, origin);
-          int near = 0, i = -1;
-          all.Near(q.x_px, q.y_px, tol_px, [&](int o) {
-            if (c.usable[o]) ++near, i = o;
-          });
-          if (near != 1) continue;
-          const std::string& why = result.images[i].reason;  // (unassigned, and refused by no check)
-          const bool shared = (images[i].flags & kStarCrowded) && (images[i].flags & kStarBlended);
-          if ((why != "unlinked" && why != "unverified") || shared ||
-              !trail_internal::Compatible(c, i, e, path.VelocityAt(dt), flux_of.at(k)))
-            continue;
-          TrailImage& ti = result.images[i];
-          ti = TrailImage{};
-          TagAs(&ti, k, e);
-          ti.flow_checked = true;
-          ti.residual_x_px = c.p[i].x_px - q.x_px, ti.residual_y_px = c.p[i].y_px - q.y_px;
-          ti.residual_px = Dist(c.p[i], q);
-          ti.refined_px = c.p[i];
-          const trail_internal::FitSigma sigma = trail_internal::FitSigmaOf(options, images[i]);
-          ti.sigma_refined_x_px = sigma.x_px, ti.sigma_refined_y_px = sigma.y_px;
-          (e.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
-          kept_of[k].push_back({je, i});
-          std::sort(kept_of[k].begin(), kept_of[k].end());
-          std::vector<int>& chain_images = result.chains[k].images;
-          chain_images.push_back(i);
-          std::sort(chain_images.begin(), chain_images.end(),
-                    [&](int a, int b) { return result.images[a].mid_s < result.images[b].mid_s; });
+          bool apart = true;  // (from the neighbouring exposures' places)
+          for (int jn : {je - 1, je + 1})
+            if (jn >= 0 && jn < static_cast<int>(ex.size()) && path.Covers(ex[jn].mid_s - t_end))
+              apart = apart && Dist(path.At(ex[jn].mid_s - t_end), q) > 2.0 * tol_px;
+          const int i = apart ? flow_place_image(path, dt, origin, ex[je], flux_of.at(k)) : -1;
+          const auto taken = [&](const std::pair<int, int>& ji) { return ji.second == i; };
+          if (i < 0 || std::any_of(found.begin(), found.end(), taken)) continue;
+          found.push_back({je, i});
+          places.push_back(q);
         }
-        const auto [lo, hi] = std::minmax_element(kept_of[k].begin(), kept_of[k].end());
-        result.chains[k].missed_exposures = hi->first - lo->first + 1 - static_cast<int>(kept_of[k].size());
-      }
+        if (static_cast<int>(found.size()) < kSiblingFillImages) return;
+        const int cid = static_cast<int>(result.chains.size());
+        TrailChain tc;
+        tc.decoded_by = "flow_fill";
+        tc.trail = s + 1;
+        tc.leading_dashes = program.leading_dashes[s];
+        const PixelPoint v = flow.Velocity(origin);
+        tc.rate_px_per_s = std::hypot(v.x_px, v.y_px);
+        result.chains.push_back(tc);
+        tracks.emplace_back();  // (none: its images are the flow's)
+        kept_of.emplace_back();
+        const int r = Root(parent, root);
+        parent.push_back(r);
+        numbers.push_back(1 << s);
+        numbers[r] |= 1 << s;
+        flux_of[cid] = flux_of.at(k);
+        for (size_t n = 0; n < found.size(); ++n) tag_flow_checked(cid, found[n].first, found[n].second, places[n]);
+        recount_missed(cid);
+      });
   };
   if (options.grow_siblings) GrowSiblings();
   if (options.pattern_trails) {

@@ -130,6 +130,8 @@ struct TrailOptions {
   bool flow_fills_trails = true;       // each decoded trail's exposures beyond its first and last images filled
                                        // along the flow (beyond the growth's or the track's reach): one compatible
                                        // image within flow_tolerance_px, tagged at its measured position
+  bool flow_fills_siblings = true;     // a decoded star's trails still missing filled the same way, exposure by
+                                       // exposure from its trail nearest in time (at least 3 images)
   bool flow_entering_trails = true;    // such a trail entering the format (its run beyond it) numbered by its other
                                        // trails' absence: the one number under which none of them lies on the
                                        // format where nothing is (docs/trails.md, "Trails entering the format")
@@ -187,7 +189,8 @@ struct TrailChain {
   int bad_images = 0;              // images flagged bad by the track fit
   int missed_exposures = 0;        // exposures of the trail's span without an image taken
   std::string reason;              // empty if decoded, else why refused
-  std::string decoded_by;          // the step that found it: run, sibling, separators, flow, lone
+  std::string decoded_by;          // the step that found it: run, sibling, separators, flow, lone,
+                                   // flow_fill (no track: its images flow_checked)
 };
 
 // The trails of one star (same diurnal arc, one after another).

@@ -8,6 +8,7 @@
 #include <map>
 #include <numbers>
 #include <numeric>
+#include <set>
 #include <unordered_map>
 
 #include "platemeter/core/error.h"
@@ -971,7 +972,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     };
     // Each decoded star's missing trail s (fn(root, s, k, t_end, origin)), carried from the end (origin at
     // t_end) of the star's decoded trail k nearest to it in time (the flow's error grows with the distance
-    // carried): nearest in number, the most images.
+    // carried): nearest in number, the most images; the end of its track's own images.
     auto for_missing_trails = [&](const std::function<void(int, int, int, double, const PixelPoint&)>& fn) {
       std::map<int, std::vector<int>> trails_of;  // star root -> its decoded trails
       for (int k = 0; k < static_cast<int>(result.chains.size()); ++k)
@@ -984,8 +985,10 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
             const int dq = std::abs(result.chains[q].trail - 1 - s), dk = std::abs(result.chains[k].trail - 1 - s);
             if (dq < dk || (dq == dk && kept_of[q].size() > kept_of[k].size())) k = q;
           }
-          double t0 = 0, t1 = 0;
-          ends(k, &t0, &t1);
+          double t0 = 1e300, t1 = -1e300;  // (the track's own images: not those the flow filled beyond them)
+          for (const auto& [j, i] : kept_of[k])
+            if (!result.images[i].flow_checked)
+              t0 = std::min(t0, result.images[i].mid_s), t1 = std::max(t1, result.images[i].mid_s);
           const double t_end = s > result.chains[k].trail - 1 ? t1 : t0;
           fn(root, s, k, t_end, tracks[k].At(t_end));
         }
@@ -1035,8 +1038,10 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     complete_stars();  // the new stars' trails short of flow_min_images in their reading
     // An exposure's place along the flow (q, carried from origin): exactly one image (assigned or not) within
     // the flow's tolerance, unassigned, refused by no check but a track's ("unlinked", "unverified", or
-    // "off_track": 0.3 px off a track fitted among other stars' images -- the flow's place is a check of its
-    // own), compatible (length, flux) and no piece shared in a clump; -1 otherwise.
+    // "off_track": more than tight_tolerance_px off a track fitted among other stars' images -- then within
+    // that of the place: the flow from a trail's end predicts what its track does, and the image its own
+    // track dropped must not come back), compatible (length, flux) and no piece shared in a clump; -1
+    // otherwise.
     auto flow_place_image = [&](const FlowPath& path, double dt, const PixelPoint& origin, const ShutterExposure& e,
                                 double flux_per_s) {
       const PixelPoint q = path.At(dt);
@@ -1048,7 +1053,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       if (near != 1) return -1;
       const std::string& why = result.images[i].reason;  // (unassigned, and refused by no check but a track's)
       const bool shared = (images[i].flags & kStarCrowded) && (images[i].flags & kStarBlended);
-      if ((why != "unlinked" && why != "unverified" && why != "off_track") || shared ||
+      const bool off_track = why == "off_track" && Dist(c.p[i], q) <= options.tight_tolerance_px;
+      if ((why != "unlinked" && why != "unverified" && !off_track) || shared ||
           !trail_internal::Compatible(c, i, e, path.VelocityAt(dt), flux_per_s))
         return -1;
       return i;
@@ -1110,9 +1116,11 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       }
     // A decoded star's trails still missing (too few images for a track of their own, or refused by its fit
     // among other stars' images): each exposure's place carried along the flow from the end of the star's
-    // trail nearest in time, filled as above. At least kSiblingFillImages of them make the trail (a single
-    // image at the flow's tolerance may be a chance coincidence over the thousands of places tried). A slow
-    // star, whose exposures' places lie within two tolerances of each other, is left out.
+    // trail nearest in time, filled as above. At least kSiblingFillImages of them, of two exposure lengths,
+    // make the trail (a single image at the flow's tolerance may be a chance coincidence over the thousands
+    // of places tried). An exposure whose neighbours' places lie within two tolerances of its own (a slow
+    // star) is skipped; a place holding an image tagged with that trail number (the trail decoded as
+    // another star's) leaves the trail alone.
     if (options.flow_fills_siblings)
       for_missing_trails([&](int root, int s, int k, double t_end, const PixelPoint& origin) {
         const std::vector<ShutterExposure>& ex = c.per_trail[s];
@@ -1125,6 +1133,12 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           if (!path.Covers(dt)) continue;
           const PixelPoint q = path.At(dt);
           const double tol_px = trail_internal::FlowTolerance_px(options, q, origin);
+          // (the trail decoded as another star's: not filled twice)
+          bool decoded_there = false;
+          all.Near(q.x_px, q.y_px, tol_px, [&](int o) {
+            decoded_there = decoded_there || (result.images[o].assigned && result.images[o].trail == s + 1);
+          });
+          if (decoded_there) return;
           bool apart = true;  // (from the neighbouring exposures' places)
           for (int jn : {je - 1, je + 1})
             if (jn >= 0 && jn < static_cast<int>(ex.size()) && path.Covers(ex[jn].mid_s - t_end))
@@ -1135,7 +1149,9 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           found.push_back({je, i});
           places.push_back(q);
         }
-        if (static_cast<int>(found.size()) < kSiblingFillImages) return;
+        std::set<double> durations_s;  // (a chance image at each place would rarely fit two exposure lengths)
+        for (const auto& [je, i] : found) durations_s.insert(ex[je].duration_s);
+        if (static_cast<int>(found.size()) < kSiblingFillImages || durations_s.size() < 2) return;
         const int cid = static_cast<int>(result.chains.size());
         TrailChain tc;
         tc.decoded_by = "flow_fill";

@@ -34,15 +34,12 @@ constexpr int kOtherDashes = 2, kDurations = 4;
 constexpr double kNotDecodedTolerances = 2.0;
 // An empty place of a trail counts where an image of that trail (any star's) is tagged within this.
 constexpr double kExposedRadius_px = 150.0;
-// Of a sibling's places on the format, at least this fraction empty says it is absent (with three or more).
-constexpr double kAbsentFraction = 0.7;
 
 // Whether, under trail number u (the seed at seed_s of that trail), another trail of the star lies on the
 // format where nothing could hold it: at least two of its dashes' places inside the format along the flow,
-// at least two of them empty and at most one not, or at least three and kAbsentFraction of them (a crowd
-// puts an image of another star's flux at some places), by flux (DashHolder::by_flux: the star's dashes
-// measure alike). The flow predicts a place to flow_tolerance_px over hundreds of pixels, so an empty place
-// says the trail is not there; a trail that is there holds nearly all of its places.
+// at least two of them empty and at most one not (a crowd may put an image at one), by flux
+// (DashHolder::by_flux: the star's dashes measure alike). The flow predicts a place to flow_tolerance_px
+// over hundreds of pixels, so an empty place says the trail is not there.
 bool SiblingAbsent(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s, int u,
                    double flux_per_s, const std::function<int(int)>& trail_of) {
   const TrailOptions& o = c.o;
@@ -64,8 +61,7 @@ bool SiblingAbsent(const Context& c, const Grid& all, const FlowPath& path, cons
       empty += exposed &&
                DashPlaceEmpty(c, all, q, path.VelocityAt(dt), flux_per_s * e.duration_s, e.duration_s, tol_px, true);
     }
-    if (inside >= 2 && (empty >= std::max(2, inside - 1) || (empty >= 3 && empty >= kAbsentFraction * inside)))
-      return true;
+    if (inside >= 2 && empty >= std::max(2, inside - 1)) return true;
   }
   return false;
 }

@@ -152,9 +152,21 @@ struct DashHolder {
 // Whether nothing could hold a dash of this flux, duration_s of motion long, predicted at q (within tol_px)
 // moving with this velocity: no detection, alone or with others (DashHolder), within half the dash and two
 // FWHM along the motion and 1.5 FWHM across it (a neighbouring star's parallel trail, a few FWHM aside,
-// holds none of it), and no rejected line reaching there. by_flux: DashHolder::by_flux.
+// holds none of it), and no rejected line reaching there. by_flux: DashHolder::by_flux. Images `explained`
+// says are another's hold nothing.
 bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, const PixelPoint& velocity_px_per_s,
-                    double dash_flux_dn, double duration_s, double tol_px, bool by_flux = false);
+                    double dash_flux_dn, double duration_s, double tol_px, bool by_flux = false,
+                    const std::function<bool(int)>& explained = {});
+
+// Whether image i, taken by another star with that star's flux, cannot have swallowed a dash of dash_flux_dn:
+// its flux would exceed its star's by the dash's, which the flux tolerance lets through only when
+// dash_flux <= (tolerance x its flux + 4 sigma) / (1 + tolerance). Not a piece of a crowded clump (the dash
+// may have been cut, part of it taken with that image).
+inline bool CannotHideDash(const Context& c, int i, double dash_flux_dn) {
+  const DetectedStar& h = c.images[i];
+  return h.flux_dn > 0 && !(h.flags & kStarCrowded) &&
+         dash_flux_dn > (c.o.flux_tolerance * h.flux_dn + 4.0 * h.sigma_flux_dn) / (1.0 + c.o.flux_tolerance);
+}
 
 // Whether a point image (length 0) may be an exposure expected expect_px long: the detector sees no sweep
 // under about one FWHM in its thresholded moments, which run short, so a swept image of up to two FWHM (a

@@ -58,8 +58,14 @@ bool SiblingAbsent(const Context& c, const Grid& all, const FlowPath& path, cons
       bool exposed = false;
       all.Near(q.x_px, q.y_px, kExposedRadius_px, [&](int i) { exposed = exposed || trail_of(i) == s + 1; });
       const double tol_px = FlowTolerance_px(o, q, p);
-      empty += exposed &&
-               DashPlaceEmpty(c, all, q, path.VelocityAt(dt), flux_per_s * e.duration_s, e.duration_s, tol_px, true);
+      // (An image tagged as another trail number of another star, whose flux leaves no room for this dash,
+      // holds none of it; one tagged with trail s may be the star's own.)
+      const double dash_flux_dn = flux_per_s * e.duration_s;
+      const auto explained = [&](int i) {
+        return trail_of(i) > 0 && trail_of(i) != s + 1 && CannotHideDash(c, i, dash_flux_dn);
+      };
+      empty += exposed && DashPlaceEmpty(c, all, q, path.VelocityAt(dt), dash_flux_dn, e.duration_s, tol_px, true,
+                                         explained);
     }
     if (inside >= 2 && empty >= std::max(2, inside - 1)) return true;
   }
@@ -193,12 +199,7 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
     double faint_flux_dn = 0;  // pieces of a dash the deblender cut add up
     ForReaching(c, all, q, reach_px, [&](int i) {
       const DetectedStar& h = c.images[i];
-      // Another star's image, taken with that star's flux: had it swallowed this dash, its flux would exceed
-      // that star's by the dash's, which the flux tolerance lets through only when dash_flux <= (tolerance x
-      // its flux + 4 sigma) / (1 + tolerance).
-      // (Not a piece of a crowded clump: the dash may have been cut, part of it taken with that image.)
-      const bool explained = excluded && excluded(i) && h.flux_dn > 0 && !(h.flags & kStarCrowded) &&
-                             dash_flux > (o.flux_tolerance * h.flux_dn + 4.0 * h.sigma_flux_dn) / (1.0 + o.flux_tolerance);
+      const bool explained = excluded && excluded(i) && CannotHideDash(c, i, dash_flux);  // another star's
       const bool faint = h.flux_dn > 0 && h.flux_dn < 0.5 * dash_flux && !(h.flags & (kStarCrowded | kStarBlended));
       if (explained || std::find(run.begin(), run.end(), i) != run.end()) return;
       if (!faint) empty = false;

@@ -31,7 +31,8 @@ bool Inside(const TrailOptions& o, const PixelPoint& p, double margin_px) {
 }
 
 bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, const PixelPoint& velocity_px_per_s,
-                    double dash_flux_dn, double duration_s, double tol_px, bool by_flux) {
+                    double dash_flux_dn, double duration_s, double tol_px, bool by_flux,
+                    const std::function<bool(int)>& explained) {
   const TrailOptions& o = c.o;
   const double speed = std::hypot(velocity_px_per_s.x_px, velocity_px_per_s.y_px);
   if (!(speed > 0)) return false;
@@ -40,6 +41,7 @@ bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, cons
   DashHolder holder{dash_flux_dn, dash_length_px};
   holder.by_flux = by_flux;
   ForReaching(c, all, q, along_px, [&](int i) {
+    if (explained && explained(i)) return;
     const double dx = c.p[i].x_px - q.x_px, dy = c.p[i].y_px - q.y_px;
     if (IsLine(c.images[i]) || std::abs(dx * velocity_px_per_s.y_px - dy * velocity_px_per_s.x_px) / speed <= across_px)
       holder.Add(c.images[i]);

@@ -44,6 +44,13 @@ void AddFeatureOptions(OptionOverlay<DetectRequest>& o) {
     if (!r.trails) throw Error("--trail-break-s", "needs --trails-start-utc (or [trails] in the job file)");
     r.trails->break_s = trails.break_s;
   });
+  CLI::Option* joined = o.command()->add_flag(
+      "--trails-require-joined", trails.require_joined,
+      "tag only trails joined to another trail of their star (lone and entering trails stay untagged)");
+  o.OnGiven(joined, [](DetectRequest& r) {
+    if (!r.trails) throw Error("--trails-require-joined", "needs --trails-start-utc (or [trails] in the job file)");
+    r.trails->require_joined = true;
+  });
 
   // Passpoints: giving the mark's diameter switches them on.
   PasspointRequest& passpoints = o.parsed().passpoints.emplace();

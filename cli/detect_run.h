@@ -17,6 +17,8 @@ struct TrailRequest {
   std::string start_utc;                      // ISO 8601 UTC of the plate's first shutter opening (required)
   std::vector<int> leading_dashes{2, 3, 4, 5};  // leading dash count per trail, in exposure order
   double break_s = 480.0;                     // s; break between trails (7-10 min)
+  bool require_joined = false;                // tag only trails joined to another trail of their star
+                                              // (a lone trail's number is confirmed by nothing else)
 };
 
 // Marked passpoints (dots or rings) to measure.

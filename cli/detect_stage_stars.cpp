@@ -136,6 +136,7 @@ StageOutput RunStarStage(const DetectContext& context) {
     trail_options.image_min_px = {0.0, 0.0};
     trail_options.image_max_px = {context.image.info().width_px - 1.0, context.image.info().height_px - 1.0};
     trail_options.exposed_outline_px = ExposedOutline_px(context);
+    trail_options.require_joined = request.trails->require_joined;
   }
   const std::vector<DetectedStar> stars = DetectStars(context.image, options);
 

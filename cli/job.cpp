@@ -189,6 +189,7 @@ const std::vector<KeySetter>& Setters() {
          CheckTrails(trails, v);
          Trails(j) = trails;
        }},
+      {"trails.require_joined", [](JobDefinition& j, const Value& v) { Trails(j).require_joined = v.Bool(); }},
       {"passpoints.list_file",
        [](JobDefinition& j, const Value& v) {
          Passpoints(j).list_file = v.FromManifest() ? v.String() : JobPath(j, v.String());

@@ -59,6 +59,7 @@ std::string CanonicalOptionsText(const MeasureRequest& request) {
     line("trails.start_utc", Quoted(d.trails->start_utc));
     line("trails.leading_dashes", "[" + dashes + "]");
     line("trails.break_s", Number(d.trails->break_s));
+    line("trails.require_joined", boolean(d.trails->require_joined));
   } else {
     line("trails", "none");
   }

@@ -1195,6 +1195,13 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   }
   std::sort(groups.begin(), groups.end());
   for (const std::vector<int>& g : groups) {
+    // (with require_joined every trail tagged has a sibling of its star: the later steps' lone ones too)
+    if (options.require_joined && g.size() < 2) {
+      result.bad_images -= result.chains[g[0]].bad_images;
+      refuse(result.chains[g[0]], kept_of[g[0]], "lone_trail");
+      kept_of[g[0]].clear();
+      continue;
+    }
     const int s = static_cast<int>(result.stars.size());
     result.stars.push_back({g});
     for (int k : g) {

@@ -85,7 +85,7 @@ TEST(CliJob, DocsExampleLoadsAndEveryDocumentedKeyReachesTheRequest) {
 
   // The docs document exactly the keys the example sets, and the overrides accept them all.
   const std::set<std::string> documented = DocumentedKeys();
-  EXPECT_EQ(documented.size(), 26u);
+  EXPECT_EQ(documented.size(), 27u);
   std::set<std::string> all_but_grid = documented;  // grid excludes camera: loaded on its own below
   all_but_grid.erase("grid");
   EXPECT_EQ(ExampleKeys(example), all_but_grid);
@@ -109,6 +109,7 @@ TEST(CliJob, DocsExampleLoadsAndEveryDocumentedKeyReachesTheRequest) {
   EXPECT_EQ(d.trails->start_utc, "1972-05-12T05:30:00Z");
   EXPECT_EQ(d.trails->leading_dashes, (std::vector<int>{2, 3, 4}));
   EXPECT_EQ(d.trails->break_s, 540.0);
+  EXPECT_TRUE(d.trails->require_joined);
   ASSERT_TRUE(d.passpoints);
   EXPECT_EQ(d.passpoints->list_file, dir.file("passpoints.csv"));  // relative to the job file
   EXPECT_EQ(d.passpoints->shape, "ring");
@@ -258,7 +259,8 @@ TEST(CliJob, TheFingerprintHasEveryOutputChangingOption) {
       {"camera", "orbigon"}, {"grid", "orbigon-reseau"}, {"pixel_size_um", "10.000001"}, {"orientation", "0m"},
       {"allow_ambiguous_orientation", "true"}, {"stars.enabled", "false"}, {"stars.bright", "true"},
       {"stars.fwhm_px", "1.9"}, {"trails.start_utc", "1972-05-12T05:30:01Z"}, {"trails.leading_dashes", "2,3,5"},
-      {"trails.break_s", "541"}, {"passpoints.list_file", dir.file("other.csv")}, {"passpoints.shape", "dot"},
+      {"trails.break_s", "541"}, {"trails.require_joined", "false"}, {"passpoints.list_file", dir.file("other.csv")},
+      {"passpoints.shape", "dot"},
       {"passpoints.diameter_um", "251"}, {"passpoints.line_width_um", "31"}, {"passpoints.polarity", "dark"},
       {"temperature_degC", "22.5"}, {"emulsion_depth_um", "20"}, {"refractive_index", "1.65"}, {"model", "scales"},
       {"rejection_threshold", "4"}, {"tolerance_um", "5"}, {"local_reseau", "true"}, {"fiducial_orientation", "false"},
@@ -325,6 +327,7 @@ TEST(CliJob, DetectionFlagsGivenOverrideTheJobAndOnlyThose) {
   // time and the diameter switch them on, with the details given and the defaults.
   EXPECT_THROW(Resolve({}, "--trail-dashes 3,5"), Error);
   EXPECT_THROW(Resolve({}, "--trail-break-s 500"), Error);
+  EXPECT_THROW(Resolve({}, "--trails-require-joined"), Error);
   EXPECT_THROW(Resolve({}, "--passpoint-shape ring"), Error);
   EXPECT_THROW(Resolve({}, "--passpoints list.csv"), Error);
   const DetectRequest b = Resolve({}, "--trail-break-s 500 --trails-start-utc 1972-05-12T05:30:00Z --passpoint-diameter-um 200 "
@@ -333,6 +336,7 @@ TEST(CliJob, DetectionFlagsGivenOverrideTheJobAndOnlyThose) {
   EXPECT_EQ(b.trails->start_utc, "1972-05-12T05:30:00Z");
   EXPECT_EQ(b.trails->leading_dashes, (std::vector<int>{2, 3, 4, 5}));
   EXPECT_EQ(b.trails->break_s, 500.0);
+  EXPECT_FALSE(b.trails->require_joined);
   EXPECT_EQ(b.passpoints->diameter_um, 200.0);
   EXPECT_EQ(b.passpoints->shape, "dot");
   EXPECT_EQ(b.passpoints->polarity, "dark");

@@ -89,6 +89,24 @@ TEST(CliTrails, DetectWritesTimeTaggedTrailDotsThatMatchTheTruth) {
               right_dots, truth_dots, 100.0 * right_dots / truth_dots, wrong, truth_stars_of.size());
   EXPECT_EQ(wrong, 0);
   EXPECT_GE(right_dots, 0.9 * truth_dots);
+
+  // With --trails-require-joined every tagged trail has a sibling of its star.
+  const auto joined = RunPlatemeter("detect '" + dir.file("sim/trails.tif") +
+                                    "' --camera orbigon --orientation 0 --stars --star-fwhm-px 2.4 "
+                                    "--trails-start-utc 1972-05-12T05:30:00Z --trails-require-joined -o '" +
+                                    dir.file("joined") + "'");
+  ASSERT_EQ(joined.exit_code, 0) << joined.err;
+  std::map<std::string, std::set<std::string>> trails_of;
+  long joined_rows = 0;
+  for (const MeasuredPoint& m : ReadMeasurementFile(dir.file("joined/trails.measurements.csv")).points)
+    if (m.kind == PointKind::kTrailDot || m.kind == PointKind::kTrailDash) {
+      trails_of[m.star_id].insert(m.trail);
+      ++joined_rows;
+    }
+  for (const auto& [star, trails] : trails_of) EXPECT_GE(trails.size(), 2u) << star << " is a lone trail";
+  std::printf("[cli trails, require joined] %ld trail rows of %zu stars\n", joined_rows, trails_of.size());
+  EXPECT_GT(joined_rows, rows / 2);
+  EXPECT_LE(joined_rows, rows);
 }
 
 }  // namespace

@@ -283,6 +283,10 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
                                      [](TrailOptions* o) { o->flow_fills_siblings = false; });
   EXPECT_EQ(no_siblings.wrong, 0);
   EXPECT_LT(no_siblings.right, score.right);
+  // Trails joined to a sibling only (require_joined: no lone or entering trails), fewer, none wrong.
+  const Score joined = rescored("joined trails only", [](TrailOptions* o) { o->require_joined = true; });
+  EXPECT_EQ(joined.wrong, 0);
+  EXPECT_LT(joined.right, score.right);
 }
 
 // Stars with a single trail on the plate (as where the others leave the format): no sibling can number it,

@@ -989,6 +989,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           for (const auto& [j, i] : kept_of[k])
             if (!result.images[i].flow_checked)
               t0 = std::min(t0, result.images[i].mid_s), t1 = std::max(t1, result.images[i].mid_s);
+          if (t0 > t1) continue;  // (a trail of flow-filled images only has no track to carry)
           const double t_end = s > result.chains[k].trail - 1 ? t1 : t0;
           fn(root, s, k, t_end, tracks[k].At(t_end));
         }

@@ -1085,20 +1085,22 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       const auto [lo, hi] = std::minmax_element(kept_of[k].begin(), kept_of[k].end());
       result.chains[k].missed_exposures = hi->first - lo->first + 1 - static_cast<int>(kept_of[k].size());
     };
-    // Each decoded trail's exposures beyond its first and last images, filled along the flow: carried from
-    // the trail's image nearest in time (the track there), an exposure's place must hold one image as
-    // flow_place_image says. Such images lie beyond the growth's reach (after exposures missed in a row,
-    // where a crossing star took the trail's images) or beyond the track's (a long gap at its end:
-    // "unverified"); the flow checks them.
+    // Each decoded trail's exposures without an image, filled along the flow: carried from the trail's image
+    // nearest in time (the track there), an exposure's place must hold one image as flow_place_image says.
+    // Such images lie beyond the growth's reach (after exposures missed in a row, where a crossing star took
+    // the trail's images) or beyond the track's (a long gap at its end: "unverified"); the flow checks them.
+    // In a gap inside the trail only an image nothing refused ("unlinked") within tight_tolerance_px of
+    // the track (the flow alone took a dash merged with a crossing star's there: 1 wrong tag).
     if (options.flow_fills_trails)
       for (int k = 0; k < static_cast<int>(result.chains.size()); ++k) {
         if (!decoded(k)) continue;
         const std::vector<ShutterExposure>& ex = c.per_trail[result.chains[k].trail - 1];
-        // (beyond its first and last images only: a gap inside is the growth's and the track's to judge)
         const auto [first_it, last_it] = std::minmax_element(kept_of[k].begin(), kept_of[k].end());
         const int first = first_it->first, last = last_it->first;
         for (int je = 0; je < static_cast<int>(ex.size()); ++je) {
-          if (je >= first && je <= last) continue;
+          const bool inside = je >= first && je <= last;
+          const auto held = [&](const std::pair<int, int>& ji) { return ji.first == je; };
+          if (inside && std::any_of(kept_of[k].begin(), kept_of[k].end(), held)) continue;
           const ShutterExposure& e = ex[je];
           int nearest = -1;
           for (const auto& [j, o] : kept_of[k])  // (the track's own images: it reaches them)
@@ -1111,7 +1113,11 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           const FlowPath path(flow, origin, std::abs(dt) + 30.0);
           if (!path.Covers(dt)) continue;
           const int i = flow_place_image(path, dt, origin, e, flux_of.at(k));
-          if (i >= 0) tag_flow_checked(k, je, i, path.At(dt));
+          // (a gap inside: the track knows the place too; an image it or a crowd check refused stays out)
+          if (i < 0 || (inside && (result.images[i].reason != "unlinked" ||
+                                   Dist(c.p[i], tracks[k].At(e.mid_s)) > options.tight_tolerance_px)))
+            continue;
+          tag_flow_checked(k, je, i, path.At(dt));
         }
         recount_missed(k);
       }

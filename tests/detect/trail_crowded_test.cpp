@@ -218,9 +218,10 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
               r.Summary().c_str());
   EXPECT_EQ(score.wrong, 0);
   EXPECT_GT(score.clean_dots, 2000);
-  // Trails filled along the flow beyond their first and last images: within its tolerance, with the sigmas
-  // of the measurement (position floor included), and beyond the images the track was fitted to.
-  long flow_checked = 0;
+  // Trails filled along the flow, beyond their first and last images and in gaps inside them (there only
+  // within tight_tolerance_px of the track too): within the flow's tolerance, with the sigmas of the
+  // measurement (position floor included).
+  long flow_checked = 0, inside_gaps = 0;
   std::map<int, std::pair<double, double>> track_span_s;  // chain -> first, last mid-time of its track's images
   for (size_t k = 0; k < field->found.size(); ++k) {
     const TrailImage& ti = r.images[k];
@@ -236,9 +237,12 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
     EXPECT_GE(ti.sigma_refined_x_px, field->options.position_floor_px);
     if (r.chains[ti.chain].decoded_by == "flow_fill") continue;  // a star's missing trail: no track of its own
     const auto& [t0, t1] = track_span_s.at(ti.chain);
-    EXPECT_TRUE(ti.mid_s < t0 || ti.mid_s > t1) << "a gap inside a trail filled";
+    inside_gaps += ti.mid_s > t0 && ti.mid_s < t1;
   }
+  std::printf("[crowded] %ld images filled along the flow, %ld of them in gaps inside their trails\n", flow_checked,
+              inside_gaps);
   EXPECT_GT(flow_checked, 100);
+  EXPECT_GT(inside_gaps, 0);
   EXPECT_GE(score.right, score.clean_dots * 85 / 100);  // figures in docs/trails.md
   // The same field linked with some steps changed.
   auto rescored = [&](const char* what, const std::function<void(TrailOptions*)>& change) {

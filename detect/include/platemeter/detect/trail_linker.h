@@ -127,9 +127,10 @@ struct TrailOptions {
   int flow_min_sibling_images = 6;     // images a decoded star's missing trail found along the flow must hold
   bool flow_lone_trails = true;        // a star with one trail on the format numbered by its run found along the
                                        // flow (not with require_joined: nothing else confirms the number)
-  bool flow_fills_trails = true;       // each decoded trail's exposures beyond its first and last images filled
-                                       // along the flow (beyond the growth's or the track's reach): one compatible
-                                       // image within flow_tolerance_px, tagged at its measured position
+  bool flow_fills_trails = true;       // each decoded trail's exposures without an image filled along the flow
+                                       // (beyond the growth's or the track's reach): one compatible image within
+                                       // flow_tolerance_px (in a gap inside: also within tight_tolerance_px of
+                                       // the track), tagged at its measured position
   bool flow_fills_siblings = true;     // a decoded star's trails still missing filled the same way, exposure by
                                        // exposure from its trail nearest in time (at least 3 images)
   bool flow_entering_trails = true;    // such a trail entering the format (its run beyond it) numbered by its other

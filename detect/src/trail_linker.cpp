@@ -756,22 +756,27 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   for (int k = 0; k < m; ++k)
     if (decoded(k)) numbers[Root(parent, k)] |= 1 << (result.chains[k].trail - 1);
   // A new chain (trail number s, its images (exposure, image)) as a star of its own; false when refused.
-  auto add_chain = [&](const char* step, int s, const std::vector<std::pair<int, int>>& taken, double flux_per_s,
-                       double rate_px_per_s, int missed, int min_images = 0) {
+  // A new chain of trail s (0-based) found by `step`, a star of its own, with nothing taken yet; its index.
+  auto open_chain = [&](const char* step, int s, double flux_per_s, double rate_px_per_s) {
     const int cid = static_cast<int>(result.chains.size());
     TrailChain tc;
     tc.decoded_by = step;
     tc.trail = s + 1;
     tc.leading_dashes = program.leading_dashes[s];
     tc.rate_px_per_s = rate_px_per_s;
-    tc.missed_exposures = missed;
-    for (const auto& [j, i] : taken) owner_count[i] = 1;
     result.chains.push_back(tc);
     tracks.emplace_back();
     kept_of.emplace_back();
     parent.push_back(cid);
     numbers.push_back(1 << s);
     flux_of[cid] = flux_per_s;
+    return cid;
+  };
+  auto add_chain = [&](const char* step, int s, const std::vector<std::pair<int, int>>& taken, double flux_per_s,
+                       double rate_px_per_s, int missed, int min_images = 0) {
+    const int cid = open_chain(step, s, flux_per_s, rate_px_per_s);
+    result.chains[cid].missed_exposures = missed;
+    for (const auto& [j, i] : taken) owner_count[i] = 1;
     return settle(cid, taken, min_images);
   };
   auto GrowSiblings = [&] {
@@ -1159,21 +1164,12 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         std::set<double> durations_s;  // (a chance image at each place would rarely fit two exposure lengths)
         for (const auto& [je, i] : found) durations_s.insert(ex[je].duration_s);
         if (static_cast<int>(found.size()) < kSiblingFillImages || durations_s.size() < 2) return;
-        const int cid = static_cast<int>(result.chains.size());
-        TrailChain tc;
-        tc.decoded_by = "flow_fill";
-        tc.trail = s + 1;
-        tc.leading_dashes = program.leading_dashes[s];
         const PixelPoint v = flow.Velocity(origin);
-        tc.rate_px_per_s = std::hypot(v.x_px, v.y_px);
-        result.chains.push_back(tc);
-        tracks.emplace_back();  // (none: its images are the flow's)
-        kept_of.emplace_back();
+        // (no track of its own: its images are the flow's) joined to the star
+        const int cid = open_chain("flow_fill", s, flux_of.at(k), std::hypot(v.x_px, v.y_px));
         const int r = Root(parent, root);
-        parent.push_back(r);
-        numbers.push_back(1 << s);
+        parent[cid] = r;
         numbers[r] |= 1 << s;
-        flux_of[cid] = flux_of.at(k);
         for (size_t n = 0; n < found.size(); ++n) tag_flow_checked(cid, found[n].first, found[n].second, places[n]);
         recount_missed(cid);
       });

@@ -463,8 +463,8 @@ int main(int argc, char** argv) {
       why += trails_right.count({t.star, t.trail}) ? " (trail partly right)" : stars_right.count(t.star) ? " (another trail of the star right)" : " (nothing of the star right)";
       ++lost[why];
       if (lost_out) {
-        std::fprintf(lost_out, "dot %s T%d %d %.3f %.3f %s\n", star_names[t.star].c_str(), t.trail, t.index, t.x_px,
-                     t.y_px, why.c_str());
+        std::fprintf(lost_out, "dot %s T%d %d %.3f %.3f %s [snr %.0f]\n", star_names[t.star].c_str(), t.trail, t.index,
+                     t.x_px, t.y_px, why.c_str(), t.snr);
         lost_stars.insert(t.star);
       }
     }

@@ -336,7 +336,8 @@ struct LoneTrail {
 // the format where nothing may hold a dash (within half a dash and two FWHM: no image but one fainter than
 // half a dash, or one taken by another star whose flux tolerance could not have let a swallowed dash
 // through; no rejected line). That count must be a trail's and the star's other trails must not prefer
-// another number; then flow_min_images images, 2 dashes besides the seed, 4 exposure durations. A slow star
+// another number; then flow_min_images images, 2 dashes besides the seed, 4 exposure durations (a trail
+// cut by the format's edge: those it shows there, at least 3; flow_cut_trails). A slow star
 // (10 s of motion within 2 tolerances) is not decoded.
 // trail_of(i): the trail number (1..) image i is tagged with, 0 if none (entering trails: a place counts as
 // empty only where that trail was exposed, "Trails entering the format").

@@ -29,6 +29,8 @@ constexpr int kCandidateImages = 5;
 // As in DecodeByFlow: dashes besides the seed, and exposure durations among the images (a reading shifted by
 // a dot group maps the dots onto other durations; the flux tolerance lets some of them through, not all).
 constexpr int kOtherDashes = 2, kDurations = 4;
+// A trail cut by the format's edge: dashes and at least two dot durations.
+constexpr int kMinDurationsCut = 3;
 // A slow star (10 s of motion within this many flow tolerances) is not decoded: readings shifted by 10 s land
 // on its own images. (Its run may merge: the merged explanation below counts it.)
 constexpr double kNotDecodedTolerances = 2.0;
@@ -70,6 +72,28 @@ bool SiblingAbsent(const Context& c, const Grid& all, const FlowPath& path, cons
     if (inside >= 2 && empty >= std::max(2, inside - 1)) return true;
   }
   return false;
+}
+
+// The exposure durations a lone trail's images must show: kDurations, or, for a trail cut by the format's
+// edge (dots of its program beyond it: a trail leaving the format after its first dot groups, or entering it
+// for its last ones), every duration of its exposures on the format, at least kMinDurationsCut.
+// seed_from_first_dot_s: the seed's time from the trail's first dot.
+int DurationsRequired(const Context& c, const FlowPath& path, int trail, double seed_from_first_dot_s) {
+  const std::vector<ShutterExposure>& ex = c.per_trail[trail];
+  const double seed_s = ex[FirstDot(ex)].mid_s + seed_from_first_dot_s;
+  std::vector<double> on_format_s;
+  bool cut = false;  // dots of the program off the format
+  for (size_t k = 0; k < ex.size(); ++k) {
+    const double dt = ex[k].mid_s - seed_s;
+    if (path.Covers(dt) && Inside(c.o, path.At(dt), c.o.edge_margin_px))
+      on_format_s.push_back(ex[k].duration_s);
+    else
+      cut = cut || ex[k].kind == ExposureKind::kDot;
+  }
+  if (!cut || !c.o.flow_cut_trails) return kDurations;
+  std::sort(on_format_s.begin(), on_format_s.end());
+  const int on_format = static_cast<int>(std::unique(on_format_s.begin(), on_format_s.end()) - on_format_s.begin());
+  return std::max(kMinDurationsCut, std::min(kDurations, on_format));
 }
 
 }  // namespace
@@ -257,7 +281,7 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   // seed suffices where its siblings' absence gave the number.)
   const int other_dashes = off_format ? 1 : kOtherDashes;
   return static_cast<int>(out->taken.size()) >= o.flow_min_images && cover.other_dashes >= other_dashes &&
-         cover.durations >= kDurations;
+         cover.durations >= DurationsRequired(c, path, trail, ex[best->exposure].mid_s - ex[first_dot].mid_s);
 }
 
 }  // namespace platemeter::trail_internal

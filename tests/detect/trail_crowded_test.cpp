@@ -337,6 +337,12 @@ TEST(TrailCrowded, TrailsEnteringTheFormatAreNumberedByTheirSiblingsAbsence) {
       WithAndWithout("entering trails", *field, options, [](TrailOptions* o) { o->flow_entering_trails = false; });
   EXPECT_GT(score.clean_dots, 1000);
   EXPECT_GT(score.right, before.right + score.clean_dots / 25);  // figures in docs/trails.md
+  // An entering trail may show its last dot groups only, and trails leave this format too, some after their
+  // run and one or two dot groups: such a lone trail needs only the exposure durations it shows on the format
+  // (docs/trails.md, "Trails cut by the format's edge").
+  const auto [cut, cut_before] =
+      WithAndWithout("cut trails", *field, options, [](TrailOptions* o) { o->flow_cut_trails = false; });
+  EXPECT_GT(cut.right, cut_before.right);
   // A cloud (or a shutter fault) during the last trail: no star's T4 anywhere. Read as absent, it would
   // refute every entering T3 and leave T4 standing; a trail's place counts only where that trail was exposed.
   const auto clouded = BuildField(FieldSpec(7.0), [&](const MeasuredPoint& t) { return inside(t) && t.trail != "T4"; });

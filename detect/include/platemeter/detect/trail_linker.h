@@ -136,6 +136,10 @@ struct TrailOptions {
   bool flow_entering_trails = true;    // such a trail entering the format (its run beyond it) numbered by its other
                                        // trails' absence: the one number under which none of them lies on the
                                        // format where nothing is (docs/trails.md, "Trails entering the format")
+  bool flow_cut_trails = true;         // such a trail cut by the format's edge (leaving it after its first dot
+                                       // groups, entering it for its last) needs only the exposure durations it
+                                       // shows on the format, at least 3, instead of 4 (docs/trails.md, "Trails
+                                       // cut by the format's edge")
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
   // beyond it (trail 3 minus one dash looks like a complete trail 2): the position one dash before
   // the run must lie inside by edge_margin_px, else the run is refused. Unset (max <= min):

@@ -36,8 +36,7 @@ ProgramCover CoverOf(const Context& c, const std::vector<std::vector<std::pair<i
       cover.other_dashes += i != seed && c.per_trail[t][j].kind == ExposureKind::kDash;
       durations_s.push_back(c.per_trail[t][j].duration_s);
     }
-  std::sort(durations_s.begin(), durations_s.end());
-  cover.durations = static_cast<int>(std::unique(durations_s.begin(), durations_s.end()) - durations_s.begin());
+  cover.durations = DistinctCount(durations_s);
   return cover;
 }
 

@@ -187,6 +187,12 @@ inline int EvidenceCount(const Context& c, const std::vector<std::pair<int, int>
 // What a reading's images show of the program: dashes besides the seed, and distinct exposure durations
 // (a reading shifted by a dot group maps the dots onto other durations; the flux tolerance lets some through,
 // not all); evidence only (IsEvidence). taken_per_trail: (exposure, image) per trail (0-based).
+// The number of distinct values among `values` (exposure durations, s).
+inline int DistinctCount(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return static_cast<int>(std::unique(values.begin(), values.end()) - values.begin());
+}
+
 struct ProgramCover {
   int other_dashes = 0, durations = 0;
 };

@@ -8,7 +8,6 @@
 #include <map>
 #include <numbers>
 #include <numeric>
-#include <set>
 #include <unordered_map>
 
 #include "platemeter/core/error.h"
@@ -755,7 +754,6 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   std::vector<int> numbers(m, 0);  // per star root: bit u set when the star holds trail u + 1
   for (int k = 0; k < m; ++k)
     if (decoded(k)) numbers[Root(parent, k)] |= 1 << (result.chains[k].trail - 1);
-  // A new chain (trail number s, its images (exposure, image)) as a star of its own; false when refused.
   // A new chain of trail s (0-based) found by `step`, a star of its own, with nothing taken yet; its index.
   auto open_chain = [&](const char* step, int s, double flux_per_s, double rate_px_per_s) {
     const int cid = static_cast<int>(result.chains.size());
@@ -772,6 +770,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     flux_of[cid] = flux_per_s;
     return cid;
   };
+  // A new chain (trail number s, its images (exposure, image)) as a star of its own; false when refused.
   auto add_chain = [&](const char* step, int s, const std::vector<std::pair<int, int>>& taken, double flux_per_s,
                        double rate_px_per_s, int missed, int min_images = 0) {
     const int cid = open_chain(step, s, flux_per_s, rate_px_per_s);
@@ -1161,9 +1160,9 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           found.push_back({je, i});
           places.push_back(q);
         }
-        std::set<double> durations_s;  // (a chance image at each place would rarely fit two exposure lengths)
-        for (const auto& [je, i] : found) durations_s.insert(ex[je].duration_s);
-        if (static_cast<int>(found.size()) < kSiblingFillImages || durations_s.size() < 2) return;
+        std::vector<double> durations_s;  // (a chance image at each place would rarely fit two exposure lengths)
+        for (const auto& [je, i] : found) durations_s.push_back(ex[je].duration_s);
+        if (static_cast<int>(found.size()) < kSiblingFillImages || trail_internal::DistinctCount(durations_s) < 2) return;
         const PixelPoint v = flow.Velocity(origin);
         // (no track of its own: its images are the flow's) joined to the star
         const int cid = open_chain("flow_fill", s, flux_of.at(k), std::hypot(v.x_px, v.y_px));

@@ -91,9 +91,7 @@ int DurationsRequired(const Context& c, const FlowPath& path, int trail, double 
       cut = cut || ex[k].kind == ExposureKind::kDot;
   }
   if (!cut || !c.o.flow_cut_trails) return kDurations;
-  std::sort(on_format_s.begin(), on_format_s.end());
-  const int on_format = static_cast<int>(std::unique(on_format_s.begin(), on_format_s.end()) - on_format_s.begin());
-  return std::max(kMinDurationsCut, std::min(kDurations, on_format));
+  return std::max(kMinDurationsCut, std::min(kDurations, DistinctCount(on_format_s)));
 }
 
 }  // namespace

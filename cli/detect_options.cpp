@@ -52,6 +52,14 @@ void AddFeatureOptions(OptionOverlay<DetectRequest>& o) {
     r.trails->require_joined = true;
   });
 
+  CLI::Option* no_forced = o.command()->add_flag(
+      "--trails-no-forced-dots{false}", trails.forced_dots,
+      "do not measure a decoded trail's undetected dots at its track's prediction");
+  o.OnGiven(no_forced, [](DetectRequest& r) {
+    if (!r.trails) throw Error("--trails-no-forced-dots", "needs --trails-start-utc (or [trails] in the job file)");
+    r.trails->forced_dots = false;
+  });
+
   // Passpoints: giving the mark's diameter switches them on.
   PasspointRequest& passpoints = o.parsed().passpoints.emplace();
   CLI::Option* diameter =

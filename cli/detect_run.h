@@ -19,6 +19,8 @@ struct TrailRequest {
   double break_s = 480.0;                     // s; break between trails (7-10 min)
   bool require_joined = false;                // tag only trails joined to another trail of their star
                                               // (a lone trail's number is confirmed by nothing else)
+  bool forced_dots = true;                    // a decoded trail's undetected dots measured at its track's
+                                              // prediction (docs/trails.md)
 };
 
 // Marked passpoints (dots or rings) to measure.

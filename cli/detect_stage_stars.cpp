@@ -11,6 +11,7 @@
 #include "platemeter/calib/apparent_place.h"
 #include "platemeter/core/error.h"
 #include "platemeter/detect/star_detector.h"
+#include "platemeter/detect/trail_forced.h"
 #include "platemeter/detect/trail_linker.h"
 
 namespace platemeter::cli {
@@ -72,7 +73,8 @@ MeasuredPoint StarRow(const DetectedStar& star) {
 // image's mid-exposure (docs/detect.md: correlated along the trail); the
 // direct measurement stays in the flags. A bad image (off the track) keeps
 // its measured position and is rejected; one found along the plate's flow
-// beyond the track's images (flow_check) keeps its measured position.
+// beyond the track's images (flow_check) or measured at the track's
+// prediction (forced_fit) keeps its measured position.
 MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const calib::UtcInstant& start_utc) {
   MeasuredPoint row = StarRow(star);
   const bool dot = t.kind == ExposureKind::kDot;
@@ -95,7 +97,7 @@ MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const cali
   row.flags.push_back(value);
   std::snprintf(value, sizeof value, "measured_y_px=%.4f", star.point.position_px.y_px);
   row.flags.push_back(value);
-  row.flags.push_back(t.flow_checked ? "flow_check" : "track_fit");
+  row.flags.push_back(t.flow_checked ? "flow_check" : t.forced ? "forced_fit" : "track_fit");
   row.x_px = t.refined_px.x_px;
   row.y_px = t.refined_px.y_px;
   row.sigma_x_px = t.sigma_refined_x_px;
@@ -154,8 +156,24 @@ StageOutput RunStarStage(const DetectContext& context) {
   }
 
   const TrailLinkResult linked = LinkTrails(stars, schedule, trail_options);
+  // The decoded trails' undetected dots, measured where their tracks put them.
+  ForcedDotOptions forced_options;
+  forced_options.enabled = request.trails->forced_dots;
+  ScanPixels scan;
+  scan.read = [&image = context.image](const PixelRect& rect, float* values_dn) { image.ReadWindowInto(rect, values_dn); };
+  scan.width_px = context.image.info().width_px, scan.height_px = context.image.info().height_px;
+  scan.dark = options.dark;
+  scan.low_dn = options.floor_dn;
+  scan.high_dn = options.saturation_dn.value_or(context.image.info().full_scale_dn);
+  ForcedDotStats forced_stats;
+  const std::vector<ForcedDot> forced =
+      MeasureMissingDots(scan, stars, linked, schedule, trail_options, forced_options, &forced_stats);
+  std::vector<bool> replaced(stars.size(), false);  // detections re-measured as a trail's dot
+  for (const ForcedDot& f : forced)
+    if (f.replaces >= 0) replaced[f.replaces] = true;
   std::map<std::string, long> unassigned;
   for (size_t i = 0; i < stars.size(); ++i) {
+    if (replaced[i]) continue;
     const TrailImage& t = linked.images[i];
     MeasuredPoint row = StarRow(stars[i]);
     if (!t.assigned) {
@@ -166,6 +184,7 @@ StageOutput RunStarStage(const DetectContext& context) {
     }
     out.rows.push_back(TrailRow(stars[i], t, *start_utc));
   }
+  for (const ForcedDot& f : forced) out.rows.push_back(TrailRow(f.image, f.tag, *start_utc));
   nlohmann::json reasons = nlohmann::json::object();
   for (const auto& [reason, n] : unassigned) reasons[reason] = n;
   long decoded = 0;
@@ -179,9 +198,20 @@ StageOutput RunStarStage(const DetectContext& context) {
                            {"assigned_dots", linked.assigned_dots},
                            {"assigned_dashes", linked.assigned_dashes},
                            {"bad_images", linked.bad_images},
+                           {"forced_dots",
+                            {{"tried", forced_stats.tried},
+                             {"measured", forced_stats.measured},
+                             {"outside", forced_stats.outside},
+                             {"crowded", forced_stats.crowded},
+                             {"clipped", forced_stats.clipped},
+                             {"failed", forced_stats.failed},
+                             {"faint", forced_stats.faint},
+                             {"off_place", forced_stats.off_place},
+                             {"off_flux", forced_stats.off_flux}}},
                            {"unassigned_by_reason", reasons},
                            {"summary", linked.Summary()}};
-  out.message = std::to_string(stars.size()) + " images; trails: " + linked.Summary();
+  out.message = std::to_string(stars.size()) + " images; trails: " + linked.Summary() + "; " +
+                std::to_string(forced.size()) + " undetected dots measured at their tracks' predictions";
   return out;
 }
 

@@ -190,6 +190,7 @@ const std::vector<KeySetter>& Setters() {
          Trails(j) = trails;
        }},
       {"trails.require_joined", [](JobDefinition& j, const Value& v) { Trails(j).require_joined = v.Bool(); }},
+      {"trails.forced_dots", [](JobDefinition& j, const Value& v) { Trails(j).forced_dots = v.Bool(); }},
       {"passpoints.list_file",
        [](JobDefinition& j, const Value& v) {
          Passpoints(j).list_file = v.FromManifest() ? v.String() : JobPath(j, v.String());

@@ -60,6 +60,7 @@ std::string CanonicalOptionsText(const MeasureRequest& request) {
     line("trails.leading_dashes", "[" + dashes + "]");
     line("trails.break_s", Number(d.trails->break_s));
     line("trails.require_joined", boolean(d.trails->require_joined));
+    line("trails.forced_dots", boolean(d.trails->forced_dots));
   } else {
     line("trails", "none");
   }

@@ -82,6 +82,10 @@ SegmentFitResult FitSegment(const std::vector<FitPixel>& pixels, const FittedSeg
 // The same with one point image beside it (fitted jointly).
 SegmentFitResult FitSegmentAndPoint(const std::vector<FitPixel>& pixels, const FittedSegment& start,
                                     const FittedPoint& point, double noise_sigma_dn);
+// The same with the segment's shape known (angle_rad, length_px and sigma_px of `start`: a trail's dot
+// where its track predicts it): only its centre, flux and the constant are fitted.
+SegmentFitResult FitPlacedSegment(const std::vector<FitPixel>& pixels, const FittedSegment& start,
+                                  double noise_sigma_dn);
 // The segment's model value (contrast, without the offset) at a pixel centre.
 double SegmentModel(const FittedSegment& segment, double x_px, double y_px);
 

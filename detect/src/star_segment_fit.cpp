@@ -19,6 +19,21 @@ constexpr double kInvSqrt2 = 0.70710678118654752440;
 constexpr double kInvSqrt2Pi = 0.39894228040143267794;
 constexpr double kMinHalfLength = 0.05;  // px; below this the segment is a point (the model's limit is smooth)
 
+// The unit-flux profile of a segment (half length h, PSF sigma widened by the pixel: se) at a pixel a along
+// and b across it from its centre, and the parts of it the derivatives need.
+struct SegmentProfile {
+  double A, B, Pr, phiA, phiB, nb, shape;
+  SegmentProfile(double a, double b, double h, double se, double se2) {
+    A = (a + h) / se, B = (a - h) / se;
+    Pr = 0.5 * (std::erf(A * kInvSqrt2) - std::erf(B * kInvSqrt2));
+    phiA = kInvSqrt2Pi * std::exp(-0.5 * A * A), phiB = kInvSqrt2Pi * std::exp(-0.5 * B * B);
+    nb = kInvSqrt2Pi / se * std::exp(-0.5 * b * b / se2);
+    shape = nb * Pr / (2.0 * h);
+  }
+  double DShapeDa(double h, double se) const { return nb / (2.0 * h) * (phiA - phiB) / se; }
+  double DShapeDb(double b, double se2) const { return shape * (-b / se2); }
+};
+
 // Parameters: offset, cx, cy (relative to the reference point), angle, half length, flux, log sigma;
 // with a point (P = 10): its x, y (relative) and flux, its width the segment's.
 template <int P>
@@ -38,15 +53,12 @@ struct SegmentCost {
     for (long i = 0; i < n; ++i) {
       const double du = pixels[i].x_px - rx - p[1], dv = pixels[i].y_px - ry - p[2];
       const double a = du * c + dv * s, b = -du * s + dv * c;
-      const double A = (a + h) / se, B = (a - h) / se;
-      const double Pr = 0.5 * (std::erf(A * kInvSqrt2) - std::erf(B * kInvSqrt2));
-      const double phiA = kInvSqrt2Pi * std::exp(-0.5 * A * A), phiB = kInvSqrt2Pi * std::exp(-0.5 * B * B);
-      const double nb = kInvSqrt2Pi / se * std::exp(-0.5 * b * b / se2);
-      const double shape = nb * Pr / (2.0 * h);
+      const SegmentProfile g(a, b, h, se, se2);
+      const double A = g.A, B = g.B, Pr = g.Pr, phiA = g.phiA, phiB = g.phiB, nb = g.nb, shape = g.shape;
       residuals[i] = p[0] + flux * shape - pixels[i].value_dn;
       if (!jacobian) continue;
-      const double dm_da = flux * nb / (2.0 * h) * (phiA - phiB) / se;
-      const double dm_db = flux * shape * (-b / se2);
+      const double dm_da = flux * g.DShapeDa(h, se);
+      const double dm_db = flux * g.DShapeDb(b, se2);
       const double dm_dh = flux * nb * ((phiA + phiB) / se / (2.0 * h) - Pr / (2.0 * h * h));
       const double dnb_dse = nb * (b * b / (se2 * se) - 1.0 / se);
       const double dP_dse = -(phiA * A - phiB * B) / se;
@@ -72,6 +84,32 @@ struct SegmentCost {
         const double dg_dse = g * ((du * du + dv * dv) / (se2 * se) - 2.0 / se);
         jacobian[6 * n + i] += p[9] * dg_dse * sigma * sigma / se;
       }
+    }
+    return true;
+  }
+};
+
+// A segment of known shape (angle, half length, PSF sigma): parameters offset, cx, cy (relative to the
+// reference point), flux.
+struct PlacedSegmentCost {
+  using Scalar = double;
+  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = 4 };
+  const std::vector<FitPixel>& pixels;
+  double rx, ry, c, s, h, se, se2;
+  int NumResiduals() const { return static_cast<int>(pixels.size()); }
+  bool operator()(const double* p, double* residuals, double* jacobian) const {
+    const long n = static_cast<long>(pixels.size());
+    for (long i = 0; i < n; ++i) {
+      const double du = pixels[i].x_px - rx - p[1], dv = pixels[i].y_px - ry - p[2];
+      const double a = du * c + dv * s, b = -du * s + dv * c;
+      const SegmentProfile g(a, b, h, se, se2);
+      residuals[i] = p[0] + p[3] * g.shape - pixels[i].value_dn;
+      if (!jacobian) continue;
+      const double dm_da = p[3] * g.DShapeDa(h, se), dm_db = p[3] * g.DShapeDb(b, se2);
+      jacobian[0 * n + i] = 1.0;
+      jacobian[1 * n + i] = dm_da * (-c) + dm_db * s;
+      jacobian[2 * n + i] = dm_da * (-s) + dm_db * (-c);
+      jacobian[3 * n + i] = g.shape;
     }
     return true;
   }
@@ -145,6 +183,47 @@ SegmentFitResult FitSegment(const std::vector<FitPixel>& pixels, const FittedSeg
 SegmentFitResult FitSegmentAndPoint(const std::vector<FitPixel>& pixels, const FittedSegment& start,
                                     const FittedPoint& point, double noise_sigma_dn) {
   return Solve<10>(pixels, start, &point, noise_sigma_dn);
+}
+
+SegmentFitResult FitPlacedSegment(const std::vector<FitPixel>& pixels, const FittedSegment& start,
+                                  double noise_sigma_dn) {
+  SegmentFitResult r;
+  r.pixels = static_cast<int>(pixels.size());
+  if (r.pixels <= 4 + 2) return r;
+  const double h = std::max(0.5 * start.length_px, kMinHalfLength);
+  const double se2 = start.sigma_px * start.sigma_px + 1.0 / 12.0;
+  const PlacedSegmentCost cost{pixels, start.x_px, start.y_px, std::cos(start.angle_rad), std::sin(start.angle_rad),
+                               h, std::sqrt(se2), se2};
+  Eigen::Vector4d x(0.0, 0.0, 0.0, start.flux_dn);
+  ceres::TinySolver<PlacedSegmentCost> solver;
+  solver.options.max_num_iterations = 60;
+  solver.options.function_tolerance = 1e-10;
+  solver.options.parameter_tolerance = 1e-10;
+  const auto& summary = solver.Solve(cost, &x);
+  if (!std::isfinite(summary.final_cost) || !x.allFinite()) return r;
+  r.converged = summary.status != decltype(solver)::HIT_MAX_ITERATIONS;
+  std::vector<double> res(pixels.size());
+  Eigen::MatrixXd j(pixels.size(), 4);
+  cost(x.data(), res.data(), j.data());
+  double rss = 0;
+  for (double e : res) rss += e * e;
+  r.residual_sigma_dn = std::sqrt(rss / (pixels.size() - 4));
+  r.chi2 = rss / (noise_sigma_dn * noise_sigma_dn);
+  r.offset_dn = x(0);
+  const Eigen::Matrix4d cov =
+      (j.transpose() * j).ldlt().solve(Eigen::Matrix4d::Identity()) * (r.residual_sigma_dn * r.residual_sigma_dn);
+  FittedSegment& s = r.segment;
+  s = start;
+  s.x_px = start.x_px + x(1);
+  s.y_px = start.y_px + x(2);
+  s.flux_dn = x(3);
+  s.sigma_x_px = std::sqrt(std::max(0.0, cov(1, 1)));
+  s.sigma_y_px = std::sqrt(std::max(0.0, cov(2, 2)));
+  s.correlation_xy = (s.sigma_x_px > 0 && s.sigma_y_px > 0) ? cov(1, 2) / (s.sigma_x_px * s.sigma_y_px) : 0.0;
+  s.sigma_flux_dn = std::sqrt(std::max(0.0, cov(3, 3)));
+  s.sigma_length_px = 0.0;
+  r.ok = true;
+  return r;
 }
 
 double SegmentModel(const FittedSegment& s, double x_px, double y_px) {

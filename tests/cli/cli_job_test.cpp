@@ -85,7 +85,7 @@ TEST(CliJob, DocsExampleLoadsAndEveryDocumentedKeyReachesTheRequest) {
 
   // The docs document exactly the keys the example sets, and the overrides accept them all.
   const std::set<std::string> documented = DocumentedKeys();
-  EXPECT_EQ(documented.size(), 27u);
+  EXPECT_EQ(documented.size(), 28u);
   std::set<std::string> all_but_grid = documented;  // grid excludes camera: loaded on its own below
   all_but_grid.erase("grid");
   EXPECT_EQ(ExampleKeys(example), all_but_grid);
@@ -110,6 +110,7 @@ TEST(CliJob, DocsExampleLoadsAndEveryDocumentedKeyReachesTheRequest) {
   EXPECT_EQ(d.trails->leading_dashes, (std::vector<int>{2, 3, 4}));
   EXPECT_EQ(d.trails->break_s, 540.0);
   EXPECT_TRUE(d.trails->require_joined);
+  EXPECT_FALSE(d.trails->forced_dots);
   ASSERT_TRUE(d.passpoints);
   EXPECT_EQ(d.passpoints->list_file, dir.file("passpoints.csv"));  // relative to the job file
   EXPECT_EQ(d.passpoints->shape, "ring");
@@ -259,7 +260,7 @@ TEST(CliJob, TheFingerprintHasEveryOutputChangingOption) {
       {"camera", "orbigon"}, {"grid", "orbigon-reseau"}, {"pixel_size_um", "10.000001"}, {"orientation", "0m"},
       {"allow_ambiguous_orientation", "true"}, {"stars.enabled", "false"}, {"stars.bright", "true"},
       {"stars.fwhm_px", "1.9"}, {"trails.start_utc", "1972-05-12T05:30:01Z"}, {"trails.leading_dashes", "2,3,5"},
-      {"trails.break_s", "541"}, {"trails.require_joined", "false"}, {"passpoints.list_file", dir.file("other.csv")},
+      {"trails.break_s", "541"}, {"trails.require_joined", "false"}, {"trails.forced_dots", "true"}, {"passpoints.list_file", dir.file("other.csv")},
       {"passpoints.shape", "dot"},
       {"passpoints.diameter_um", "251"}, {"passpoints.line_width_um", "31"}, {"passpoints.polarity", "dark"},
       {"temperature_degC", "22.5"}, {"emulsion_depth_um", "20"}, {"refractive_index", "1.65"}, {"model", "scales"},

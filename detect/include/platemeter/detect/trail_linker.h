@@ -169,6 +169,8 @@ struct TrailImage {
   bool bad = false;                // assigned, but its position disagrees with the trail's track (outlier)
   bool flow_checked = false;       // found along the plate's flow beyond the growth's or the track's reach:
                                    // refined_px is its measured position, residual the flow's
+  bool forced = false;             // not detected: measured at its track's prediction (trail_forced.h);
+                                   // refined_px is its measured position, residual the prediction's
   double residual_x_px = 0.0;      // px; measured minus fitted track position (assigned images)
   double residual_y_px = 0.0;      // px
   double residual_px = 0.0;        // px; length of the residual

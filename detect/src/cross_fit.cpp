@@ -8,9 +8,12 @@
 #include <sstream>
 
 #include "bar_profile.h"
+#include "median.h"
 
 namespace platemeter {
 namespace {
+
+using detect_internal::Median;
 
 using internal::BarProfile;
 using internal::EvaluateBarProfile;
@@ -81,13 +84,6 @@ class CrossCost : public ceres::CostFunction {
   const std::vector<Sample>* samples_;
   double xc_, yc_;
 };
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  return values[mid];
-}
 
 // Pixels near the arms (within the start's uncertainty), plus a margin of background.
 std::vector<Sample> SelectSamples(const ImageWindow& window, const CrossFitStart& start, const CrossFitOptions& options) {

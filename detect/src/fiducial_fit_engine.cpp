@@ -6,9 +6,12 @@
 #include <cmath>
 
 #include "mark_fit_engine.h"
+#include "median.h"
 
 namespace platemeter::internal {
 namespace {
+
+using detect_internal::Median;
 
 // Full parameter vector: x0, y0, shape..., gain, b0, bx, by.
 class MarkCost : public ceres::CostFunction {
@@ -75,13 +78,6 @@ class MarkCost : public ceres::CostFunction {
   int n_;
   mutable std::vector<double> values_, derivatives_, row_major_;
 };
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  return values[mid];
-}
 
 bool Solve(const MarkShapeModel& model, const std::vector<MarkSample>& samples, double xc, double yc,
            const MarkEngineSettings& settings, bool shape_fixed, std::vector<double>* p, std::string* message) {

@@ -10,17 +10,15 @@
 
 #include "platemeter/detect/overview.h"
 
+#include "median.h"
+
 namespace platemeter {
 namespace {
 
+using detect_internal::Median;
+
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
 }
 
 double SpacingMm(const MasterGrid& grid) {

@@ -119,6 +119,38 @@ struct PlacedSegmentCost {
 
 namespace {
 
+// Runs the solver on `cost` from *x (parameter 0: the constant) over n_pixels pixels; fills r's convergence,
+// residual sigma, chi^2 and offset and returns the parameters' covariance scaled by the residual variance
+// (empty when the solve failed).
+template <class Cost, int P>
+Eigen::MatrixXd RunFit(const Cost& cost, Eigen::Matrix<double, P, 1>* x, size_t n_pixels, double noise_sigma_dn,
+                       SegmentFitResult* r) {
+  ceres::TinySolver<Cost> solver;
+  solver.options.max_num_iterations = 60;
+  solver.options.function_tolerance = 1e-10;
+  solver.options.parameter_tolerance = 1e-10;
+  const auto& summary = solver.Solve(cost, x);
+  if (!std::isfinite(summary.final_cost) || !x->allFinite()) return {};
+  r->converged = summary.status != decltype(solver)::HIT_MAX_ITERATIONS;
+  std::vector<double> res(n_pixels);
+  Eigen::MatrixXd j(n_pixels, P);
+  cost(x->data(), res.data(), j.data());
+  double rss = 0;
+  for (double e : res) rss += e * e;
+  r->residual_sigma_dn = std::sqrt(rss / (n_pixels - P));
+  r->chi2 = rss / (noise_sigma_dn * noise_sigma_dn);
+  r->offset_dn = (*x)(0);
+  const Eigen::MatrixXd n = j.transpose() * j;
+  return n.ldlt().solve(Eigen::MatrixXd::Identity(P, P)) * (r->residual_sigma_dn * r->residual_sigma_dn);
+}
+
+// Formal sigmas of the parameters i (x) and i + 1 (y) and their correlation.
+void PositionSigmas(const Eigen::MatrixXd& cov, int i, double* sigma_x_px, double* sigma_y_px, double* correlation) {
+  *sigma_x_px = std::sqrt(std::max(0.0, cov(i, i)));
+  *sigma_y_px = std::sqrt(std::max(0.0, cov(i + 1, i + 1)));
+  *correlation = (*sigma_x_px > 0 && *sigma_y_px > 0) ? cov(i, i + 1) / (*sigma_x_px * *sigma_y_px) : 0.0;
+}
+
 template <int P>
 SegmentFitResult Solve(const std::vector<FitPixel>& pixels, const FittedSegment& start, const FittedPoint* point,
                        double noise_sigma_dn) {
@@ -132,23 +164,8 @@ SegmentFitResult Solve(const std::vector<FitPixel>& pixels, const FittedSegment&
   x(4) = std::max(0.5 * start.length_px, 2 * kMinHalfLength);
   x(5) = start.flux_dn, x(6) = std::log(start.sigma_px);
   if constexpr (P == 10) x(7) = point->x_px - rx, x(8) = point->y_px - ry, x(9) = point->flux_dn;
-  ceres::TinySolver<SegmentCost<P>> solver;
-  solver.options.max_num_iterations = 60;
-  solver.options.function_tolerance = 1e-10;
-  solver.options.parameter_tolerance = 1e-10;
-  const auto& summary = solver.Solve(cost, &x);
-  if (!std::isfinite(summary.final_cost) || !x.allFinite()) return r;
-  r.converged = summary.status != decltype(solver)::HIT_MAX_ITERATIONS;
-  std::vector<double> res(pixels.size());
-  Eigen::MatrixXd j(pixels.size(), P);
-  cost(x.data(), res.data(), j.data());
-  double rss = 0;
-  for (double e : res) rss += e * e;
-  r.residual_sigma_dn = std::sqrt(rss / (pixels.size() - P));
-  r.chi2 = rss / (noise_sigma_dn * noise_sigma_dn);
-  r.offset_dn = x(0);
-  const Eigen::MatrixXd n = j.transpose() * j;
-  const Eigen::MatrixXd cov = n.ldlt().solve(Eigen::MatrixXd::Identity(P, P)) * (r.residual_sigma_dn * r.residual_sigma_dn);
+  const Eigen::MatrixXd cov = RunFit(cost, &x, pixels.size(), noise_sigma_dn, &r);
+  if (cov.size() == 0) return r;
   FittedSegment& s = r.segment;
   s.x_px = rx + x(1);
   s.y_px = ry + x(2);
@@ -156,17 +173,13 @@ SegmentFitResult Solve(const std::vector<FitPixel>& pixels, const FittedSegment&
   s.length_px = 2.0 * std::max(std::abs(x(4)), kMinHalfLength);
   s.flux_dn = x(5);
   s.sigma_px = std::exp(std::clamp(x(6), -3.0, 3.9));
-  s.sigma_x_px = std::sqrt(std::max(0.0, cov(1, 1)));
-  s.sigma_y_px = std::sqrt(std::max(0.0, cov(2, 2)));
-  s.correlation_xy = (s.sigma_x_px > 0 && s.sigma_y_px > 0) ? cov(1, 2) / (s.sigma_x_px * s.sigma_y_px) : 0.0;
+  PositionSigmas(cov, 1, &s.sigma_x_px, &s.sigma_y_px, &s.correlation_xy);
   s.sigma_flux_dn = std::sqrt(std::max(0.0, cov(5, 5)));
   s.sigma_length_px = 2.0 * std::sqrt(std::max(0.0, cov(4, 4)));
   if constexpr (P == 10) {
     FittedPoint& q = r.point;
     q.x_px = rx + x(7), q.y_px = ry + x(8), q.flux_dn = x(9);
-    q.sigma_x_px = std::sqrt(std::max(0.0, cov(7, 7)));
-    q.sigma_y_px = std::sqrt(std::max(0.0, cov(8, 8)));
-    q.correlation_xy = (q.sigma_x_px > 0 && q.sigma_y_px > 0) ? cov(7, 8) / (q.sigma_x_px * q.sigma_y_px) : 0.0;
+    PositionSigmas(cov, 7, &q.sigma_x_px, &q.sigma_y_px, &q.correlation_xy);
     q.sigma_flux_dn = std::sqrt(std::max(0.0, cov(9, 9)));
     r.has_point = true;
   }
@@ -195,31 +208,14 @@ SegmentFitResult FitPlacedSegment(const std::vector<FitPixel>& pixels, const Fit
   const PlacedSegmentCost cost{pixels, start.x_px, start.y_px, std::cos(start.angle_rad), std::sin(start.angle_rad),
                                h, std::sqrt(se2), se2};
   Eigen::Vector4d x(0.0, 0.0, 0.0, start.flux_dn);
-  ceres::TinySolver<PlacedSegmentCost> solver;
-  solver.options.max_num_iterations = 60;
-  solver.options.function_tolerance = 1e-10;
-  solver.options.parameter_tolerance = 1e-10;
-  const auto& summary = solver.Solve(cost, &x);
-  if (!std::isfinite(summary.final_cost) || !x.allFinite()) return r;
-  r.converged = summary.status != decltype(solver)::HIT_MAX_ITERATIONS;
-  std::vector<double> res(pixels.size());
-  Eigen::MatrixXd j(pixels.size(), 4);
-  cost(x.data(), res.data(), j.data());
-  double rss = 0;
-  for (double e : res) rss += e * e;
-  r.residual_sigma_dn = std::sqrt(rss / (pixels.size() - 4));
-  r.chi2 = rss / (noise_sigma_dn * noise_sigma_dn);
-  r.offset_dn = x(0);
-  const Eigen::Matrix4d cov =
-      (j.transpose() * j).ldlt().solve(Eigen::Matrix4d::Identity()) * (r.residual_sigma_dn * r.residual_sigma_dn);
+  const Eigen::MatrixXd cov = RunFit(cost, &x, pixels.size(), noise_sigma_dn, &r);
+  if (cov.size() == 0) return r;
   FittedSegment& s = r.segment;
   s = start;
   s.x_px = start.x_px + x(1);
   s.y_px = start.y_px + x(2);
   s.flux_dn = x(3);
-  s.sigma_x_px = std::sqrt(std::max(0.0, cov(1, 1)));
-  s.sigma_y_px = std::sqrt(std::max(0.0, cov(2, 2)));
-  s.correlation_xy = (s.sigma_x_px > 0 && s.sigma_y_px > 0) ? cov(1, 2) / (s.sigma_x_px * s.sigma_y_px) : 0.0;
+  PositionSigmas(cov, 1, &s.sigma_x_px, &s.sigma_y_px, &s.correlation_xy);
   s.sigma_flux_dn = std::sqrt(std::max(0.0, cov(3, 3)));
   s.sigma_length_px = 0.0;
   r.ok = true;

@@ -10,23 +10,20 @@
 #include <tbb/parallel_for.h>
 
 #include "platemeter/core/error.h"
+#include "median.h"
 #include "star_internal.h"
 #include "trail_internal.h"
 
 namespace platemeter {
 namespace {
 
+using detect_internal::Median;
+
 using trail_internal::Dist;
 using trail_internal::Grid;
 using trail_internal::Track;
 
 constexpr double kFwhmPerSigma = 2.3548200450309493;
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // Distance from p to the segment of an image (its sweep: length_px along angle_deg about its centre).
 double ToSweep(const PixelPoint& p, const DetectedStar& d) {
@@ -111,17 +108,21 @@ struct MeasuredDot {
   double background_dn = 0.0;
 };
 
+MeasuredDot Refused(Outcome why) {
+  MeasuredDot m;
+  m.outcome = why;
+  return m;
+}
+
 // Fits the dot at its prediction (outcome kMeasured: it is there).
 MeasuredDot MeasureDot(const ScanPixels& scan, const Candidate& c, const ForcedDotOptions& o) {
-  MeasuredDot out;
   const double half_px = 0.5 * c.length_px + o.window_fwhm * c.fwhm_px;
   const long x0 = static_cast<long>(std::floor(c.predicted.x_px - half_px));
   const long y0 = static_cast<long>(std::floor(c.predicted.y_px - half_px));
   const long x1 = static_cast<long>(std::ceil(c.predicted.x_px + half_px));
   const long y1 = static_cast<long>(std::ceil(c.predicted.y_px + half_px));
   if (x0 < 0 || y0 < 0 || x1 >= scan.width_px || y1 >= scan.height_px) {
-    out.outcome = Outcome::kOutside;
-    return out;
+    return Refused(Outcome::kOutside);
   }
   const PixelRect rect{x0, y0, x1 - x0 + 1, y1 - y0 + 1};
   std::vector<float> values(static_cast<size_t>(rect.width_px * rect.height_px));
@@ -129,24 +130,22 @@ MeasuredDot MeasureDot(const ScanPixels& scan, const Candidate& c, const ForcedD
   const double sign = scan.dark ? -1.0 : 1.0;
   std::vector<star_internal::FitPixel> pixels;
   pixels.reserve(values.size());
-  std::vector<double> contrast;
   for (long y = y0; y <= y1; ++y)
     for (long x = x0; x <= x1; ++x) {
       const float v = values[static_cast<size_t>((y - y0) * rect.width_px + (x - x0))];
-      if (v <= scan.low_dn || v >= scan.high_dn) {  // a saturated neighbour: its light is not the dot's
-        out.outcome = Outcome::kClipped;
-        return out;
-      }
+      if (v <= scan.low_dn || v >= scan.high_dn)  // a saturated neighbour: its light is not the dot's
+        return Refused(Outcome::kClipped);
       pixels.push_back({static_cast<float>(x), static_cast<float>(y), static_cast<float>(sign * v)});
-      contrast.push_back(sign * v);
     }
   // The neighbours' light (their fitted models) taken off; the background: the window's median (the dot
   // covers a small part of it), then fitted.
-  for (size_t i = 0; i < pixels.size(); ++i)
-    for (const star_internal::FittedSegment& n : c.neighbours) {
-      const float m = static_cast<float>(star_internal::SegmentModel(n, pixels[i].x_px, pixels[i].y_px));
-      pixels[i].value_dn -= m, contrast[i] -= m;
-    }
+  std::vector<double> contrast;
+  contrast.reserve(pixels.size());
+  for (star_internal::FitPixel& px : pixels) {
+    for (const star_internal::FittedSegment& n : c.neighbours)
+      px.value_dn -= static_cast<float>(star_internal::SegmentModel(n, px.x_px, px.y_px));
+    contrast.push_back(px.value_dn);
+  }
   const double level = Median(contrast);
   for (auto& px : pixels) px.value_dn = static_cast<float>(px.value_dn - level);
   star_internal::FittedSegment start;
@@ -154,31 +153,25 @@ MeasuredDot MeasureDot(const ScanPixels& scan, const Candidate& c, const ForcedD
   start.angle_rad = c.angle_rad, start.length_px = c.length_px;
   start.sigma_px = c.fwhm_px / kFwhmPerSigma;
   start.flux_dn = c.expected_flux_dn;
+  // (noise 1 DN: only the chi^2 uses it; the sigmas come from the fit's own residual variance)
   const star_internal::SegmentFitResult fit = star_internal::FitPlacedSegment(pixels, start, 1.0);
   const star_internal::FittedSegment& s = fit.segment;
   if (!fit.ok || !fit.converged || !(s.sigma_flux_dn > 0)) {
-    out.outcome = Outcome::kFailed;
-    return out;
+    return Refused(Outcome::kFailed);
   }
   if (s.flux_dn < o.min_snr * s.sigma_flux_dn) {
-    out.outcome = Outcome::kFaint;
-    return out;
+    return Refused(Outcome::kFaint);
   }
   const double offset_px = Dist({s.x_px, s.y_px}, c.predicted);
   const double sigma_px = std::sqrt(s.sigma_x_px * s.sigma_x_px + s.sigma_y_px * s.sigma_y_px +
                                     c.sigma_predicted_px * c.sigma_predicted_px);
   if (offset_px > o.max_offset_px || offset_px > o.max_offset_sigma * sigma_px) {
-    out.outcome = Outcome::kOffPlace;
-    return out;
+    return Refused(Outcome::kOffPlace);
   }
   if (std::abs(s.flux_dn - c.expected_flux_dn) > o.flux_tolerance * c.expected_flux_dn + 3.0 * s.sigma_flux_dn) {
-    out.outcome = Outcome::kOffFlux;
-    return out;
+    return Refused(Outcome::kOffFlux);
   }
-  out.outcome = Outcome::kMeasured;
-  out.segment = s;
-  out.background_dn = sign * (level + fit.offset_dn);
-  return out;
+  return MeasuredDot{Outcome::kMeasured, s, sign * (level + fit.offset_dn)};
 }
 
 }  // namespace
@@ -301,7 +294,7 @@ std::vector<ForcedDot> MeasureMissingDots(const ScanPixels& scan, const std::vec
   // The fits (independent: in parallel; the scan's reads are thread-safe), then their tally in order.
   std::vector<MeasuredDot> measured(candidates.size());
   tbb::parallel_for(size_t{0}, candidates.size(), [&](size_t a) {
-    measured[a] = near_other[a] ? MeasuredDot{Outcome::kCrowded, {}, 0.0} : MeasureDot(scan, candidates[a], o);
+    measured[a] = near_other[a] ? Refused(Outcome::kCrowded) : MeasureDot(scan, candidates[a], o);
   });
   for (size_t a = 0; a < candidates.size(); ++a) {
     const Candidate& c = candidates[a];

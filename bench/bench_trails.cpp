@@ -164,7 +164,7 @@ int main(int argc, char** argv) {
   double pixel_um = 20.0, mag_limit = 8.0, min_snr = 10.0, ref_peak_dn = 60000.0, sensor_dn = 30.0, grain_dn = 60.0;
   double isolation_fwhm = 3.0;
   long band_rows = 0;
-  std::string keep, lost_file;  // --lost FILE: every measurable dot not right, and its star's dashes (for debugging)
+  std::string keep, lost_file;  // --lost FILE: every measurable dot not right, and every image of its star (time, SNR, length, measurable, right: for debugging)
   bool sep = true, reuse = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -470,8 +470,10 @@ int main(int argc, char** argv) {
     }
     if (lost_out) {
       for (const TruthImage& t : truth_images)
-        if (!t.dot && (lost_stars.count(t.star) || wrong_stars.count(t.star)))
-          std::fprintf(lost_out, "dash %s T%d %d %.3f %.3f\n", star_names[t.star].c_str(), t.trail, t.index, t.x_px, t.y_px);
+        if (lost_stars.count(t.star) || wrong_stars.count(t.star))
+          std::fprintf(lost_out, "%s %s T%d %d %.3f %.3f t=%.1f snr=%.0f len=%.1f%s%s\n", t.dot ? "img_dot" : "dash",
+                       star_names[t.star].c_str(), t.trail, t.index, t.x_px, t.y_px, t.mid_s, t.snr, t.length_px,
+                       counted(t) ? " measurable" : "", right.count(&t) ? " right" : "");
       std::fclose(lost_out);
     }
     std::printf("measurable dots not right, by the detection's reason:\n");

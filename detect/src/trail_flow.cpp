@@ -7,12 +7,41 @@
 #include <algorithm>
 #include <cmath>
 
+#include "median.h"
 #include "trail_internal.h"
 
 namespace platemeter::trail_internal {
 
 namespace {
 constexpr double kNotDecodedTolerances = 2.5, kSlowTolerances = 4.0;  // DecodeByFlow's slow stars, below
+// A second trail's images must sit where the first trail's do: the seed's own position error shifts a
+// right reading's predictions alike everywhere (whole V <= 8 plate: of 209 unique readings' dashless second
+// trails, 193 within 0.15 px of their first trail's offset); another star's dots lined up by a wrong reading
+// lie anywhere within the tolerance (the one wrong reading of that kind seen there: 0.52 px).
+constexpr double kSameOffset_px = 0.15;
+
+// The median offset of a reading's images of trail t (0-based) from their places along `path`.
+PixelPoint MedianOffset(const Context& c, const FlowPath& path, const std::vector<std::pair<int, int>>& taken, size_t t,
+                        double t_origin_s) {
+  std::vector<double> dx, dy;
+  for (const auto& [j, i] : taken) {
+    const PixelPoint q = path.At(c.per_trail[t][j].mid_s - t_origin_s);
+    dx.push_back(c.p[i].x_px - q.x_px), dy.push_back(c.p[i].y_px - q.y_px);
+  }
+  return {detect_internal::Median(dx), detect_internal::Median(dy)};
+}
+
+// The median, over a reading's evidence images besides the seed, of measured flux / (the seed's flux per
+// second x the exposure's duration): near 1 when the seed's flux is the star's (a seed merged with another
+// image reads about 0.5).
+double FluxRatio(const Context& c, const std::vector<std::vector<std::pair<int, int>>>& taken, int seed,
+                 double flux_per_s) {
+  std::vector<double> ratio;
+  for (size_t t = 0; t < taken.size(); ++t)
+    for (const auto& [j, i] : taken[t])
+      if (i != seed && IsEvidence(c, i)) ratio.push_back(c.images[i].flux_dn / (flux_per_s * c.per_trail[t][j].duration_s));
+  return ratio.empty() ? 0.0 : detect_internal::Median(ratio);
+}
 }  // namespace
 
 void AddFlowSamples(const Track& track, const std::vector<double>& t_s, std::vector<PixelPoint>* p,
@@ -98,22 +127,32 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   // 19 wrong tags, a lone trail read under another number with 4 chance dots of a "second trail").
   if (10.0 * speed < kNotDecodedTolerances * o.flow_tolerance_px) return false;
   const bool slow = 10.0 * speed < kSlowTolerances * o.flow_tolerance_px;
+  const bool crowded = o.flow_crowded_readings && !slow;  // the crowd's weaker evidence (below)
   const double flux_per_s = d.flux_dn / any_dash->duration_s;
   const FlowPath path = PlatePath(c, flow, p);
   const unsigned every_trail = (1u << c.per_trail.size()) - 1u;
+  // Decoded: a trail of flow_min_images and a second one holding more dots than a wrong reading lines up
+  // (without a dash: more, at the first trail's offset; below).
+  // A candidate (another one makes the decision ambiguous): a trail of 5 and a second one with 3 dots.
+  constexpr int kSecondTrailDots = 4, kCandidateFirst = 5, kCandidateDots = 3, kOtherDashes = 2, kDurations = 4;
+  constexpr int kDashlessDots = 5;
+  constexpr int kManyDashes = 5, kManyDashesDurations = 3, kOneDashDurations = 5;
+  constexpr double kMinFluxRatio = 0.8;
   // Evidence of a reading: the trail with the most images, and the dots of the next best trail. A wrong
   // reading lines up one trail of the star (the trails' dot programs are shifted 30 s against each other)
   // and at most 2 dots of any other (docs/trails.md, "The plate's flow": the schedule's own shifts), except
   // the two readings 120 s off, which line up 8 dots of every trail (and so are always candidates).
   struct Evidence {
     int first = 0, second_images = 0, second_dots = 0;  // evidence (IsEvidence; a second trail with a dash)
-    int any_first = 0, any_second_dots = 0;             // every image taken (the ambiguity test's candidates)
+    int same_offset_dashless = 0;  // ... of a second trail without one, at the first trail's offset, 2 groups
+    int any_first = 0, any_second_dots = 0;  // every image taken (the ambiguity test's candidates)
   };
   // A second trail must show a dash of its own (a separator: the brightest images of its program): a
   // group of evenly spaced dots of another star on nearly the same diurnal arc, at the place of a
   // neighbouring trail under a reading shifted by a break, lines up with no dash (whole plate: a lone
-  // trail read under the next number so, 15 wrong tags).
-  auto evidence = [&](const FlowStar& s) {
+  // trail read under the next number so, 15 wrong tags) -- unless its images sit at the first trail's
+  // offset (kSameOffset_px) and show two dot groups (another star's group lines up within one).
+  auto evidence = [&](const FlowStar& s, double t_origin_s) {
     const size_t n = s.taken.size();
     std::vector<int> images(n, 0), dots(n, 0), dashes(n, 0), any_dots(n, 0);
     for (size_t t = 0; t < n; ++t)
@@ -132,6 +171,15 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       if (dots[t] > ev.second_dots || (dots[t] == ev.second_dots && images[t] > ev.second_images))
         ev.second_dots = dots[t], ev.second_images = images[t];
     }
+    const PixelPoint top_offset = MedianOffset(c, path, s.taken[top], top, t_origin_s);
+    for (size_t t = 0; t < n; ++t) {
+      if (static_cast<int>(t) == top || dots[t] < kDashlessDots) continue;
+      if (Dist(MedianOffset(c, path, s.taken[t], t, t_origin_s), top_offset) > kSameOffset_px) continue;
+      std::vector<double> groups;
+      for (const auto& [j, i] : s.taken[t])
+        if (c.per_trail[t][j].kind == ExposureKind::kDot && IsEvidence(c, i)) groups.push_back(c.per_trail[t][j].group);
+      if (DistinctCount(groups) >= 2) ev.same_offset_dashless = std::max(ev.same_offset_dashless, dots[t]);
+    }
     int any_top = 0;
     for (size_t t = 0; t < n; ++t)
       if (s.taken[t].size() > s.taken[any_top].size()) any_top = static_cast<int>(t);
@@ -140,9 +188,6 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       if (static_cast<int>(t) != any_top) ev.any_second_dots = std::max(ev.any_second_dots, any_dots[t]);
     return ev;
   };
-  // Decoded: a trail of flow_min_images and a second one holding more dots than a wrong reading lines up.
-  // A candidate (another one makes the decision ambiguous): a trail of 5 and a second one with 3 dots.
-  constexpr int kSecondTrailDots = 4, kCandidateFirst = 5, kCandidateDots = 3, kOtherDashes = 2, kDurations = 4;
   constexpr int kSlowFirst = 12, kSlowSecondTrailDots = 8, kSlowDurations = 5;
   const int need_first = slow ? std::max(kSlowFirst, o.flow_min_images) : o.flow_min_images;
   const int need_second_dots = slow ? kSlowSecondTrailDots : kSecondTrailDots;
@@ -157,12 +202,14 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       const unsigned own = 1u << (e.trail - 1);
       if (CollectAlongFlow(c, all, path, p, e.mid_s, flux_per_s, own, excluded).hits < 3) continue;
       FlowStar s = CollectAlongFlow(c, all, path, p, e.mid_s, flux_per_s, every_trail, excluded);
-      const Evidence ev = evidence(s);
+      const Evidence ev = evidence(s, e.mid_s);
       // The dash itself must be taken as that exposure (alone within the tolerance).
       bool self = false;
       for (const auto& [j, i] : s.taken[e.trail - 1]) self |= i == dash && c.per_trail[e.trail - 1][j].mid_s == e.mid_s;
       const bool candidate = ev.any_first >= kCandidateFirst && ev.any_second_dots >= kCandidateDots;
-      const bool decoded = self && ev.first >= need_first && ev.second_dots >= need_second_dots;
+      const bool second = ev.second_dots >= need_second_dots ||
+                          (crowded && ev.same_offset_dashless >= kDashlessDots);
+      const bool decoded = self && ev.first >= need_first && second;
       readings += candidate || decoded;
       if (!decoded) continue;
       // Dashes besides the seed: a seed merged with another image (twice its flux) reads the star's 1.2 s
@@ -170,8 +217,17 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       // not taken. Images of at least four of the program's six exposure durations: a reading shifted within
       // the trails maps the star's dots onto other groups, and the flux tolerance (a faint dot's sigma) lets
       // some of those through (on the whole V <= 8 plate: 1.2 s dots read as 0.6 s ones, 10 s as 6.2 s), not all.
+      // Where the crowd hides the star's other dashes or durations, other proof of the seed's flux (not slow):
+      // many dashes (5) with 3 durations; one dash with 5 durations, or with 4 and the images' flux per
+      // second the seed's (FluxRatio within 0.8-1.25; a merged seed reads about 0.5).
       const ProgramCover cover = CoverOf(c, s.taken, dash);
-      if (cover.other_dashes < kOtherDashes || cover.durations < need_durations) continue;
+      const bool usual = cover.other_dashes >= kOtherDashes && cover.durations >= need_durations;
+      const bool many_dashes = cover.other_dashes >= kManyDashes && cover.durations >= kManyDashesDurations;
+      const double ratio = cover.other_dashes >= 1 ? FluxRatio(c, s.taken, dash, flux_per_s) : 0.0;
+      const bool one_dash = cover.other_dashes >= 1 &&
+                            (cover.durations >= kOneDashDurations ||
+                             (cover.durations >= kDurations && ratio > kMinFluxRatio && ratio < 1.0 / kMinFluxRatio));
+      if (!usual && !(crowded && (many_dashes || one_dash))) continue;
       best = std::move(s);
     }
   if (readings != 1 || best.hits == 0) return false;

@@ -403,6 +403,21 @@ TEST(TrailCrowded, AStarsSparseTrailIsFilledAlongTheFlowFromItsOtherTrails) {
   EXPECT_LE(right_before, dots * 3 / 10);
 }
 
+// In a crowd a star's dashes merge with other images: a reading of its one free dash may find a second
+// trail without a dash of its own. Its dots sit where the first trail's images do (the seed's own error
+// shifts them all alike), which another star's dots lined up by a wrong reading do not; and the seed's
+// flux, which the star's other dashes would confirm, is confirmed by many exposure durations or by the
+// images' own flux per second (docs/trails.md, "The plate's flow" 3).
+TEST(TrailCrowded, AStarWithFewFreeDashesIsDecodedByItsTrailsDots) {
+  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
+    GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
+  const auto field = BuildField(FieldSpec(7.0), [](const MeasuredPoint&) { return true; });
+  const auto [score, before] = WithAndWithout("crowded readings", *field, field->options,
+                                              [](TrailOptions* o) { o->flow_crowded_readings = false; });
+  EXPECT_GT(score.clean_dots, 2000);
+  EXPECT_GT(score.right, before.right);  // figures in docs/trails.md
+}
+
 // Trails whose leading runs are wholly lost (merged into crossing images, or under dust) are still
 // decoded: a sibling decoded from its own run grows them across the break (their number is its
 // number +- 1), and a trail with no decoded sibling is grown from a separator dash and numbered by the

@@ -140,6 +140,12 @@ struct TrailOptions {
                                        // groups, entering it for its last) needs only the exposure durations it
                                        // shows on the format, at least 3, instead of 4 (docs/trails.md, "Trails
                                        // cut by the format's edge")
+  bool flow_crowded_readings = true;   // where a crowd hides a star's dashes (not a slow star's): a reading's
+                                       // second trail needs no dash when its images sit at its first trail's
+                                       // offset (within 0.15 px) with 5 dots of 2 groups; the seed's flux is
+                                       // shown by 5 other dashes and 3 durations, or 1 dash and 5 durations
+                                       // (4 with the images' flux per second the seed's) (docs/trails.md,
+                                       // "The plate's flow" 3)
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
   // beyond it (trail 3 minus one dash looks like a complete trail 2): the position one dash before
   // the run must lie inside by edge_margin_px, else the run is refused. Unset (max <= min):

@@ -144,7 +144,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   // the two readings 120 s off, which line up 8 dots of every trail (and so are always candidates).
   struct Evidence {
     int first = 0, second_images = 0, second_dots = 0;  // evidence (IsEvidence; a second trail with a dash)
-    int same_offset_dashless = 0;  // ... of a second trail without one, at the first trail's offset, 2 groups
+    int same_offset_dashless = 0;  // ... of a second trail, dash or not, at the first trail's offset, 2 groups
     int any_first = 0, any_second_dots = 0;  // every image taken (the ambiguity test's candidates)
   };
   // A second trail must show a dash of its own (a separator: the brightest images of its program): a

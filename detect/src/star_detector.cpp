@@ -118,6 +118,14 @@ DetectedStar Defect(double x, double y, const std::string& why) {
   return d;
 }
 
+// Distance from (x, y) to the nearer arm line of the cross centred at m (options.mask_arm_axes_px).
+double ArmDistance_px(const StarDetectorOptions& o, const PixelPoint& m, double x_px, double y_px) {
+  const double dx = x_px - m.x_px, dy = y_px - m.y_px;
+  double d = 1e300;
+  for (const PixelPoint& a : o.mask_arm_axes_px) d = std::min(d, std::abs(dx * a.y_px - dy * a.x_px));
+  return d;
+}
+
 // Trail mode: centre, direction and sweep length of a component from the second moments of its
 // own (positive-contrast) pixels: a uniform sweep of length L adds L^2 / 12 along its direction.
 struct SweepMoments {
@@ -351,9 +359,25 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
     const bool line_like = long_side > line_box_px;
     bool sparse = long_side > 4.0 * o.psf_fwhm_px && area < 0.3 * bw * bh;
     if (sparse && dash_mode && MaskElongation(labels, cc) > 3.0) sparse = false;  // a slanted dash, not a cross
+    // Masked: a peak near a known cross (on one of its arms, where the arms are known). The crosses near
+    // the component keep their arms' pixels out of its fit (crosses of the stars' polarity touching an
+    // image make one component with it, a defect by its shape; of the other polarity they are below the
+    // threshold but push the fit away from them).
     bool masked = false;
-    for (const PixelPoint& m : o.mask_px)
-      if (std::hypot(m.x_px - px, m.y_px - peak_y_abs) < o.mask_radius_px) masked = true;
+    std::vector<PixelPoint> near_crosses;
+    for (const PixelPoint& m : o.mask_px) {
+      const double r = std::hypot(m.x_px - px, m.y_px - peak_y_abs);
+      if (r < o.mask_radius_px && (o.mask_arm_reach_px <= 0 || ArmDistance_px(o, m, px, peak_y_abs) <= o.mask_arm_reach_px))
+        masked = true;
+      if (o.mask_arm_reach_px > 0 && r < o.mask_radius_px + window_reach * std::sqrt(2.0)) near_crosses.push_back(m);
+    }
+    const auto on_arm = [&](int x, long y_abs) {
+      for (const PixelPoint& m : near_crosses)
+        if (std::hypot(m.x_px - x, m.y_px - y_abs) < o.mask_radius_px &&
+            ArmDistance_px(o, m, x, y_abs) <= o.mask_arm_half_width_px)
+          return true;
+      return false;
+    };
     if (line_like || sparse || masked) {
       if (!line_like) {
         result.push_back(Defect(px, peak_y_abs, sparse ? "cross" : "masked"));
@@ -385,6 +409,7 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
       for (int x = x0; x < x1; ++x) {
         const int lab = labels.at<int>(y, x);
         if (lab != 0 && lab != l) continue;  // another component's pixels
+        if (!near_crosses.empty() && on_arm(x, b.y0_abs + y)) continue;
         const float raw = b.raw[long(y) * b.width + x];
         if (raw >= b.high_dn || raw <= b.low_dn) {
           ++clipped;
@@ -578,6 +603,10 @@ bool StarDetectorOptions::Check(std::string* why) const {
   if (!(max_ellipticity > 0 && max_ellipticity < 1)) return fail("max_ellipticity must be in (0, 1)");
   if (!(max_component_fwhm > 2)) return fail("max_component_fwhm must exceed 2");
   if (!(pair_chi2_gain > 0) || !(min_snr > 0) || !(mask_radius_px >= 0)) return fail("pair_chi2_gain, min_snr must be positive");
+  if (!(mask_arm_reach_px >= 0 && mask_arm_half_width_px >= 0)) return fail("mask_arm_reach_px, mask_arm_half_width_px must be >= 0");
+  if (mask_arm_reach_px > 0)
+    for (const PixelPoint& a : mask_arm_axes_px)
+      if (std::abs(std::hypot(a.x_px, a.y_px) - 1.0) > 1e-6) return fail("mask_arm_axes_px must be unit vectors");
   if (!(max_dash_length_px >= 0 && max_dash_length_px <= 2000)) return fail("max_dash_length_px must be 0..2000");
   if (!(dash_length_tolerance >= 0 && dash_length_tolerance <= 2)) return fail("dash_length_tolerance must be 0..2");
   if (!(max_dash_width_ratio > 1)) return fail("max_dash_width_ratio must exceed 1");

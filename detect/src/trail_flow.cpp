@@ -42,6 +42,19 @@ double FluxRatio(const Context& c, const std::vector<std::vector<std::pair<int, 
       if (i != seed && IsEvidence(c, i)) ratio.push_back(c.images[i].flux_dn / (flux_per_s * c.per_trail[t][j].duration_s));
   return ratio.empty() ? 0.0 : detect_internal::Median(ratio);
 }
+
+// The star's flux per second from a reading's own images, for a blended seed (its flux shared with the
+// neighbour it was fitted with): the median of flux / duration over the evidence images besides the seed;
+// 0 with fewer than 5.
+double ImagesFluxPerSecond(const Context& c, const FlowStar& s, int seed) {
+  constexpr size_t kMinImages = 5;
+  std::vector<double> rate;
+  for (size_t t = 0; t < s.taken.size(); ++t)
+    for (const auto& [j, i] : s.taken[t])
+      if (i != seed && IsEvidence(c, i) && c.images[i].flux_dn > 0)
+        rate.push_back(c.images[i].flux_dn / c.per_trail[t][j].duration_s);
+  return rate.size() < kMinImages ? 0.0 : detect_internal::Median(rate);
+}
 }  // namespace
 
 void AddFlowSamples(const Track& track, const std::vector<double>& t_s, std::vector<PixelPoint>* p,
@@ -111,7 +124,8 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   const TrailOptions& o = c.o;
   const DetectedStar& d = c.images[dash];
   // (point images too: where a dash is at most two FWHM long, Compatible takes them; measured lengths needed)
-  if (!c.use_lengths || d.flux_dn <= 0 || (d.flags & kStarBlended) || !IsEvidence(c, dash)) return false;
+  const bool blended = (d.flags & kStarBlended) != 0;
+  if (!c.use_lengths || d.flux_dn <= 0 || (blended && !o.flow_blended_seeds) || !IsEvidence(c, dash)) return false;
   const PixelPoint p = c.p[dash];
   const PixelPoint v = flow.Velocity(p);
   const double speed = std::hypot(v.x_px, v.y_px);
@@ -127,6 +141,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   // 19 wrong tags, a lone trail read under another number with 4 chance dots of a "second trail").
   if (10.0 * speed < kNotDecodedTolerances * o.flow_tolerance_px) return false;
   const bool slow = 10.0 * speed < kSlowTolerances * o.flow_tolerance_px;
+  if (slow && blended) return false;  // (a slow star's wrong readings land near its own images: no flux from them)
   const bool crowded = o.flow_crowded_readings && !slow;  // the crowd's weaker evidence (below)
   const double flux_per_s = d.flux_dn / any_dash->duration_s;
   const FlowPath path = PlatePath(c, flow, p);
@@ -200,12 +215,30 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       // First the reading's own trail (the exposures near the dash): a wrong reading finds little there,
       // and most readings of most dashes stop here.
       const unsigned own = 1u << (e.trail - 1);
-      if (CollectAlongFlow(c, all, path, p, e.mid_s, flux_per_s, own, excluded).hits < 3) continue;
-      FlowStar s = CollectAlongFlow(c, all, path, p, e.mid_s, flux_per_s, every_trail, excluded);
+      // A blended seed: the reading's images, whatever their flux, give the star's flux per second.
+      double reading_flux_per_s = flux_per_s;
+      if (blended) {
+        if (CollectAlongFlow(c, all, path, p, e.mid_s, 0.0, own, excluded).hits < 3) continue;
+        reading_flux_per_s =
+            ImagesFluxPerSecond(c, CollectAlongFlow(c, all, path, p, e.mid_s, 0.0, every_trail, excluded), dash);
+        if (!(reading_flux_per_s > 0)) continue;
+      }
+      if (CollectAlongFlow(c, all, path, p, e.mid_s, reading_flux_per_s, own, excluded).hits < 3) continue;
+      FlowStar s = CollectAlongFlow(c, all, path, p, e.mid_s, reading_flux_per_s, every_trail, excluded);
+      // The dash itself must be taken as that exposure (alone within the tolerance); a blended seed's flux
+      // may fail the reading's: then no other image may be taken there, and the seed joins the reading.
+      std::vector<std::pair<int, int>>& own_taken = s.taken[e.trail - 1];
+      const auto at_seed = std::find_if(own_taken.begin(), own_taken.end(), [&](const std::pair<int, int>& ji) {
+        return c.per_trail[e.trail - 1][ji.first].mid_s == e.mid_s;
+      });
+      bool self = at_seed != own_taken.end() && at_seed->second == dash;
+      if (blended && at_seed == own_taken.end()) {
+        const int j_seed = static_cast<int>(&e - c.per_trail[e.trail - 1].data());
+        own_taken.insert(std::lower_bound(own_taken.begin(), own_taken.end(), std::make_pair(j_seed, -1)),
+                         {j_seed, dash});
+        ++s.hits, self = true;
+      }
       const Evidence ev = evidence(s, e.mid_s);
-      // The dash itself must be taken as that exposure (alone within the tolerance).
-      bool self = false;
-      for (const auto& [j, i] : s.taken[e.trail - 1]) self |= i == dash && c.per_trail[e.trail - 1][j].mid_s == e.mid_s;
       const bool candidate = ev.any_first >= kCandidateFirst && ev.any_second_dots >= kCandidateDots;
       const bool second = ev.second_dots >= need_second_dots ||
                           (crowded && ev.same_offset_dashless >= kDashlessDots);
@@ -227,7 +260,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       const bool one_dash = cover.other_dashes >= 1 &&
                             (cover.durations >= kOneDashDurations ||
                              (cover.durations >= kDurations && ratio > kMinFluxRatio && ratio < 1.0 / kMinFluxRatio));
-      if (!usual && !(crowded && (many_dashes || one_dash))) continue;
+      if (!usual && (blended || !(crowded && (many_dashes || one_dash)))) continue;  // (not a blended seed's flux)
       best = std::move(s);
     }
   if (readings != 1 || best.hits == 0) return false;

@@ -516,6 +516,109 @@ TEST(StarDetectorTest, TrailModeDeblendsClumpsAndFlagsTheirPiecesCrowded) {
             0.1 + 4.0 * std::hypot(dot->point.sigma_x_px, dot->point.sigma_y_px));
 }
 
+// Reseau crosses of an Orbigon plate at 20 um (30 px arms, 1 px lines, 12000 DN; the scan turned by 0.02 rad)
+// with four stars between the arms of each, inside the 18 px mask disk. With the crosses' arms known, every
+// such star is measured as on a plate without crosses, with no pull toward or away from the arms:
+// - crosses of the stars' polarity, stars 9-12 px from the arms (15-16 px from the centre): with the disk
+//   mask alone all of them are lost; nothing is measured on an arm. (A star nearer than ~8 px touches the
+//   arm above the threshold: one component with the cross, a defect by its shape.)
+// - crosses of the other polarity (below the threshold), stars 3.2-4.5 px from an arm: the arm's pixels
+//   left out of the fits; with them in, the fits are pushed 0.04 px away from the arms.
+TEST(StarDetectorTest, StarsBetweenACrossArmsAreMeasured) {
+  const long w = 560, h = 560;
+  const double noise = 30.0, psf_sigma = 1.0, turn_rad = 0.02, arm_px = 30.0;
+  const PixelPoint u{std::cos(turn_rad), std::sin(turn_rad)}, v{-std::sin(turn_rad), std::cos(turn_rad)};
+  std::vector<PixelPoint> crosses;
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 5; ++j) crosses.push_back({80.0 + 100.0 * i + 0.31 * j, 80.0 + 100.0 * j + 0.17 * i});
+  struct Truth {
+    double x, y, toward_arm_x, toward_arm_y;  // the unit vector toward the nearer arm
+  };
+  // Stars `near_px` from one arm and 12 px from the other, about each cross; the arms' DN per px of length.
+  auto place = [&](double near_px) {
+    std::vector<Truth> stars;
+    const double offsets[4][2] = {{near_px, 12}, {-12, near_px}, {-near_px, -12}, {12, -near_px}};  // (along u, v)
+    for (size_t c = 0; c < crosses.size(); ++c)
+      for (int k = 0; k < 4; ++k) {
+        const double a = offsets[k][0] + 0.13 * (c / 5), b = offsets[k][1] - 0.21 * (c % 5);
+        // The nearer arm: across |a| < |b| the arm along v (distance |a|), else the one along u.
+        const double sa = std::abs(a) < std::abs(b) ? -std::copysign(1.0, a) : 0.0;
+        const double sb = std::abs(a) < std::abs(b) ? 0.0 : -std::copysign(1.0, b);
+        stars.push_back({crosses[c].x_px + a * u.x_px + b * v.x_px, crosses[c].y_px + a * u.y_px + b * v.y_px,
+                         sa * u.x_px + sb * v.x_px, sa * u.y_px + sb * v.y_px});
+      }
+    return stars;
+  };
+  auto render = [&](const std::vector<Truth>& stars, double arm_dn) {
+    std::vector<float> image(static_cast<size_t>(w * h), 1000.0f);
+    if (arm_dn != 0)
+      for (const PixelPoint& c : crosses)  // a 1 px line: a swept image of sigma 0.5 px
+        for (const PixelPoint& axis : {u, v})
+          AddSweptImage(&image, w, c.x_px, c.y_px, arm_px, std::atan2(axis.y_px, axis.x_px), arm_dn * arm_px, 0.5);
+    for (size_t k = 0; k < stars.size(); ++k)
+      AddSweptImage(&image, w, stars[k].x, stars[k].y, 0.0, 0.0, 6000.0 + 1000.0 * (k % 7), psf_sigma);
+    AddWhiteNoise(&image, noise, 777);
+    return image;
+  };
+  StarDetectorOptions disk;
+  disk.dark = false;
+  disk.psf_fwhm_px = 2.3548 * psf_sigma;
+  disk.mask_px = crosses;
+  disk.mask_radius_px = 0.5 * arm_px + 3.0;
+  StarDetectorOptions unmasked = disk, arms = disk;
+  unmasked.mask_px.clear();
+  arms.mask_arm_axes_px[0] = u, arms.mask_arm_axes_px[1] = v;
+  arms.mask_arm_half_width_px = arms.mask_arm_reach_px = 0.5 + 1.5;
+  // Stars measured, their error RMS per axis and mean pull toward the nearer arm; images measured on an arm.
+  struct Score {
+    int measured = 0, on_arms = 0;
+    double rms_px = 0, pull_px = 0;
+  };
+  auto score = [&](const std::vector<Truth>& stars, const std::vector<float>& image, const StarDetectorOptions& o) {
+    const std::vector<DetectedStar> found = DetectStarsInBuffer(image.data(), w, h, 65535.0, o);
+    Score sc;
+    double err2 = 0, toward = 0;
+    for (const Truth& t : stars) {
+      const DetectedStar* f = Nearest(found, t.x, t.y, 1.0);
+      if (!f || f->point.status != PointStatus::kMeasured) continue;
+      ++sc.measured;
+      const double ex = f->point.position_px.x_px - t.x, ey = f->point.position_px.y_px - t.y;
+      toward += ex * t.toward_arm_x + ey * t.toward_arm_y, err2 += ex * ex + ey * ey;
+    }
+    if (sc.measured > 0) sc.rms_px = std::sqrt(err2 / (2 * sc.measured)), sc.pull_px = toward / sc.measured;
+    for (const DetectedStar& f : found) {
+      if (f.point.status != PointStatus::kMeasured) continue;
+      for (const PixelPoint& c : crosses) {
+        const double dx = f.point.position_px.x_px - c.x_px, dy = f.point.position_px.y_px - c.y_px;
+        const double across = std::min(std::abs(dx * u.y_px - dy * u.x_px), std::abs(dx * v.y_px - dy * v.x_px));
+        sc.on_arms += std::hypot(dx, dy) < disk.mask_radius_px && across < 2.5;
+      }
+    }
+    return sc;
+  };
+  for (const auto& [arm_dn, near_px] : {std::pair{12000.0, 10.0}, std::pair{-12000.0, 4.0}}) {
+    SCOPED_TRACE("arms " + std::to_string(arm_dn) + " DN, stars " + std::to_string(near_px) + " px from them");
+    const std::vector<Truth> stars = place(near_px);
+    const int n = static_cast<int>(stars.size());
+    const std::vector<float> crossed = render(stars, arm_dn);
+    const Score without = score(stars, render(stars, 0.0), unmasked), with = score(stars, crossed, arms);
+    EXPECT_EQ(without.measured, n);
+    EXPECT_EQ(with.measured, n);
+    EXPECT_EQ(with.on_arms, 0);
+    EXPECT_LT(with.rms_px, 1.2 * without.rms_px);
+    EXPECT_LT(std::abs(with.pull_px), 3.0 * with.rms_px / std::sqrt(n));
+    std::printf("arms %+.0f DN, stars %.0f px from them: %d of %d measured, RMS %.4f px per axis (%.4f without "
+                "crosses), pull %+.4f px\n", arm_dn, near_px, with.measured, n, with.rms_px, without.rms_px, with.pull_px);
+    if (arm_dn > 0) {
+      EXPECT_EQ(score(stars, crossed, disk).measured, 0) << "the disk mask takes every star between the arms";
+    } else {
+      StarDetectorOptions arm_pixels_in = arms;
+      arm_pixels_in.mask_arm_half_width_px = 0.0;
+      EXPECT_LT(score(stars, crossed, arm_pixels_in).pull_px, -0.02) << "the arms' pixels push the fits away";
+    }
+  }
+}
+
 TEST(StarDetectorTest, InvalidOptionsThrow) {
   StarDetectorOptions o;
   o.psf_fwhm_px = 0.1;
@@ -523,6 +626,10 @@ TEST(StarDetectorTest, InvalidOptionsThrow) {
   EXPECT_THROW(DetectStarsInBuffer(v.data(), 10, 10, 255, o), Error);
   o = StarDetectorOptions{};
   o.max_dash_length_px = -1.0;
+  EXPECT_THROW(DetectStarsInBuffer(v.data(), 10, 10, 255, o), Error);
+  o = StarDetectorOptions{};
+  o.mask_arm_reach_px = 2.0;
+  o.mask_arm_axes_px[0] = {2.0, 0.0};
   EXPECT_THROW(DetectStarsInBuffer(v.data(), 10, 10, 255, o), Error);
 }
 

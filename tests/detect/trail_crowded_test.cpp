@@ -297,6 +297,22 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   const Score joined = rescored("joined trails only", [](TrailOptions* o) { o->require_joined = true; });
   EXPECT_EQ(joined.wrong, 0);
   EXPECT_LT(joined.right, score.right);
+  // Every star's first separator dash fitted jointly with a neighbour (flag blended, 1.6 x its flux) and its
+  // leading runs hidden (crowded pieces, no evidence): the stars decoded through the flow from the blended
+  // seeds (docs/trails.md, "The plate's flow" 3) are more, none wrong.
+  for (size_t k = 0; k < field->found.size(); ++k) {
+    int dominant = field->members[k][0];
+    for (int i : field->members[k]) dominant = field->all[i].flux > field->all[dominant].flux ? i : dominant;
+    const MeasuredPoint& t = *field->all[dominant].truth;
+    if (t.kind != PointKind::kTrailDash) continue;
+    const int leading = std::stoi(t.trail.substr(1)) + 1;  // (T n leads with n + 1 dashes)
+    DetectedStar& d = field->found[k];
+    if (*t.dot <= leading) d.flags |= kStarCrowded;
+    if (*t.dot == leading + 1) d.flags |= kStarBlended, d.flux_dn *= 1.6;
+  }
+  const auto [blended, not_blended] = WithAndWithout("blended seeds", *field, field->options,
+                                                     [](TrailOptions* o) { o->flow_blended_seeds = false; });
+  EXPECT_GT(blended.right, not_blended.right);
 }
 
 // Stars with a single trail on the plate (as where the others leave the format): no sibling can number it,

@@ -71,6 +71,14 @@ struct StarDetectorOptions {
   double max_dash_width_ratio = 1.5;      // fitted segment PSF FWHM / psf_fwhm_px above this: defect
   std::vector<PixelPoint> mask_px;        // known non-star marks (reseau crosses' positions)
   double mask_radius_px = 10.0;           // px; components within this of a mask point are defects
+  // Crosses' arms (mask_arm_reach_px > 0): the marks of mask_px are crosses with arms along the two unit
+  // vectors mask_arm_axes_px (the grid's x and y axes in the scan). A component within mask_radius_px of a
+  // centre is then a defect only when its peak lies within mask_arm_reach_px of one of the arm lines, and
+  // no star's fit takes pixels within mask_arm_half_width_px of them: star images between the arms are
+  // measured (whole V <= 8 Orbigon plate: +136 trail dots right).
+  PixelPoint mask_arm_axes_px[2] = {{1.0, 0.0}, {0.0, 1.0}};
+  double mask_arm_reach_px = 0.0;         // px; 0: the whole disk is masked
+  double mask_arm_half_width_px = 0.0;    // px; half the arm's line plus its blur
   bool Check(std::string* why) const;
 };
 

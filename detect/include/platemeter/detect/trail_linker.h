@@ -146,6 +146,10 @@ struct TrailOptions {
                                        // shown by 5 other dashes and 3 durations, or 1 dash and 5 durations
                                        // (4 with the images' flux per second the seed's) (docs/trails.md,
                                        // "The plate's flow" 3)
+  bool flow_blended_seeds = true;      // a dash fitted jointly with a neighbour (blended: its flux is not the
+                                       // star's) seeds too (not a slow star's): each reading takes the star's
+                                       // flux per second from its own images, then needs the usual evidence
+                                       // (docs/trails.md, "The plate's flow" 3)
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
   // beyond it (trail 3 minus one dash looks like a complete trail 2): the position one dash before
   // the run must lie inside by edge_margin_px, else the run is refused. Unset (max <= min):

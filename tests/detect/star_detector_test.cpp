@@ -526,7 +526,7 @@ TEST(StarDetectorTest, TrailModeDeblendsClumpsAndFlagsTheirPiecesCrowded) {
 //   left out of the fits; with them in, the fits are pushed 0.04 px away from the arms.
 TEST(StarDetectorTest, StarsBetweenACrossArmsAreMeasured) {
   const long w = 560, h = 560;
-  const double noise = 30.0, psf_sigma = 1.0, turn_rad = 0.02, arm_px = 30.0;
+  const double noise_dn = 30.0, psf_sigma_px = 1.0, turn_rad = 0.02, arm_px = 30.0;
   const PixelPoint u{std::cos(turn_rad), std::sin(turn_rad)}, v{-std::sin(turn_rad), std::cos(turn_rad)};
   std::vector<PixelPoint> crosses;
   for (int i = 0; i < 5; ++i)
@@ -556,13 +556,13 @@ TEST(StarDetectorTest, StarsBetweenACrossArmsAreMeasured) {
         for (const PixelPoint& axis : {u, v})
           AddSweptImage(&image, w, c.x_px, c.y_px, arm_px, std::atan2(axis.y_px, axis.x_px), arm_dn * arm_px, 0.5);
     for (size_t k = 0; k < stars.size(); ++k)
-      AddSweptImage(&image, w, stars[k].x, stars[k].y, 0.0, 0.0, 6000.0 + 1000.0 * (k % 7), psf_sigma);
-    AddWhiteNoise(&image, noise, 777);
+      AddSweptImage(&image, w, stars[k].x, stars[k].y, 0.0, 0.0, 6000.0 + 1000.0 * (k % 7), psf_sigma_px);
+    AddWhiteNoise(&image, noise_dn, 777);
     return image;
   };
   StarDetectorOptions disk;
   disk.dark = false;
-  disk.psf_fwhm_px = 2.3548 * psf_sigma;
+  disk.psf_fwhm_px = 2.3548 * psf_sigma_px;
   disk.mask_px = crosses;
   disk.mask_radius_px = 0.5 * arm_px + 3.0;
   StarDetectorOptions unmasked = disk, arms = disk;

@@ -157,6 +157,14 @@ struct Score {
   long mixing = 0;      // linker stars holding images of several truth stars
 };
 
+// The true image holding most of detection k's flux.
+const MeasuredPoint& DominantTruth(const Field& field, size_t k) {
+  const std::vector<int>& g = field.members[k];
+  int dominant = g[0];
+  for (int i : g) dominant = field.all[i].flux > field.all[dominant].flux ? i : dominant;
+  return *field.all[dominant].truth;
+}
+
 // A merged detection is right only when tagged as its dominant image (a close double star's images
 // coincide all along its trails: the tags hold for both).
 Score ScoreField(const Field& field, const TrailLinkResult& r, bool report) {
@@ -172,9 +180,7 @@ Score ScoreField(const Field& field, const TrailLinkResult& r, bool report) {
     const bool clean_dot = g.size() == 1 && first.kind == PointKind::kTrailDot && whole;
     score.clean_dots += clean_dot;
     if (!ti.assigned) continue;
-    int dominant = g[0];
-    for (int i : g) dominant = field.all[i].flux > field.all[dominant].flux ? i : dominant;
-    const MeasuredPoint& t = *field.all[dominant].truth;
+    const MeasuredPoint& t = DominantTruth(field, k);
     const bool dot = ti.kind == ExposureKind::kDot;
     const bool ok = (t.kind == PointKind::kTrailDot) == dot && t.trail == "T" + std::to_string(ti.trail) &&
                     *t.dot == (dot ? ti.dot_index : ti.dash_index) &&
@@ -301,9 +307,7 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   // leading runs hidden (crowded pieces, no evidence): the stars decoded through the flow from the blended
   // seeds (docs/trails.md, "The plate's flow" 3) are more, none wrong.
   for (size_t k = 0; k < field->found.size(); ++k) {
-    int dominant = field->members[k][0];
-    for (int i : field->members[k]) dominant = field->all[i].flux > field->all[dominant].flux ? i : dominant;
-    const MeasuredPoint& t = *field->all[dominant].truth;
+    const MeasuredPoint& t = DominantTruth(*field, k);
     if (t.kind != PointKind::kTrailDash) continue;
     const int leading = std::stoi(t.trail.substr(1)) + 1;  // (T n leads with n + 1 dashes)
     DetectedStar& d = field->found[k];

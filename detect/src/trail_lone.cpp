@@ -34,6 +34,8 @@ constexpr int kMinDurationsCut = 3;
 // A slow star (10 s of motion within this many flow tolerances) is not decoded: readings shifted by 10 s land
 // on its own images. (Its run may merge: the merged explanation below counts it.)
 constexpr double kNotDecodedTolerances = 2.0;
+// A reading showing this many images of another trail of the star shows that trail.
+constexpr int kShownImages = 3;
 // An empty place of a trail counts where an image of that trail (any star's) is tagged within this.
 constexpr double kExposedRadius_px = 150.0;
 
@@ -178,19 +180,21 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   const double dash_flux = a_dash.duration_s * flux_per_s, dash_length = a_dash.duration_s * speed;
   int m = 0;
   bool off_format = false;  // the run goes on beyond the format (or may)
-  for (;;) {
-    if (m > max_dashes) return false;
-    int found_k = 0, found = -1, explanations = 0;
-    for (int k = 1; m + k <= max_dashes + 1; ++k) {
-      const double dt_first = last_dash_s - 30.0 * (m + k - 1);
+  // The detection explaining dashes from .. from + k - 1 (merged, k > 1): its k and image; k = 0 when none
+  // does, -1 when more than one k or image would; off: the place of dash `from` lies beyond the format.
+  struct Explained {
+    int k = 0, image = -1;
+    bool off = false;
+  };
+  const auto explain = [&](int from) {
+    Explained r;
+    for (int k = 1; from + k <= max_dashes + 1; ++k) {
+      const double dt_first = last_dash_s - 30.0 * (from + k - 1);
       if (!path.Covers(dt_first) || !Inside(o, path.At(dt_first), o.edge_margin_px)) {
-        // Dash m's own place beyond the format: the run may go on there. Only a merge reaching beyond it:
-        // no such explanation, dash m is judged alone.
-        if (k == 1 && !o.flow_entering_trails) return false;
-        off_format = k == 1;
+        r.off = k == 1;
         break;
       }
-      const double dt = last_dash_s - 30.0 * (m + 0.5 * (k - 1));
+      const double dt = last_dash_s - 30.0 * (from + 0.5 * (k - 1));
       const PixelPoint q = path.At(dt), vq = path.VelocityAt(dt);
       const double tol = FlowTolerance_px(o, q, p);
       ShutterExposure merged = a_dash;
@@ -201,15 +205,26 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
         if (!c.usable[i] || (excluded && excluded(i)) || !Compatible(c, i, merged, vq, merged_flux_per_s)) return;
         ++count, image = i;
       });
-      if (count > 1) return false;
-      if (count == 1) ++explanations, found_k = k, found = image;
+      if (count > 1 || (count == 1 && r.k != 0)) return Explained{-1, -1, false};
+      if (count == 1) r.k = k, r.image = image;
     }
-    if (off_format) break;
-    if (explanations > 1) return false;
-    if (explanations == 1) {
-      if (found_k == 1) single[m] = found;
-      run.push_back(found);
-      m += found_k;
+    return r;
+  };
+  for (;;) {
+    if (m > max_dashes) return false;
+    const Explained e = explain(m);
+    if (e.k < 0) return false;
+    if (e.off) {
+      // Dash m's own place beyond the format: the run may go on there. (Only a merge reaching beyond it:
+      // no such explanation, dash m is judged alone.)
+      if (!o.flow_entering_trails) return false;
+      off_format = true;
+      break;
+    }
+    if (e.k > 0) {
+      if (e.k == 1) single[m] = e.image;
+      run.push_back(e.image);
+      m += e.k;
       continue;
     }
     // Dash m absent: nothing may hold it. The flow puts it within its tolerance; a detection holding it
@@ -227,8 +242,14 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
       if (!faint) empty = false;
       else faint_flux_dn += h.flux_dn;
     });
-    if (!empty || faint_flux_dn >= 0.5 * dash_flux) return false;
-    break;
+    if (empty && faint_flux_dn < 0.5 * dash_flux) break;
+    // Something at dash m's place: the run's own dash mismeasured (merged with a neighbour, cut, shaped
+    // wrong) where the run goes on, one dash (single, or the last of merged ones) at the place before it.
+    if (!o.flow_lone_held_dashes) return false;
+    const Explained next = explain(m + 1);
+    if (next.k <= 0 || next.off) return false;
+    ++m;  // dash m held by an image not its own measurement: not tagged
+    continue;
   }
   // The run's length must be a trail's. A run going on beyond the format (m of its dashes seen: a trail
   // entering the format) has no count: the number is the one of at least m dashes under which none of the
@@ -248,8 +269,15 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
     for (int u = 0; u < static_cast<int>(c.per_trail.size()); ++u) {
       const int j = best->exposure + FirstDot(c.per_trail[u]) - first_dot;  // the seed's exposure in trail u
       if (FirstDot(c.per_trail[u]) < m || j < 0 || j >= static_cast<int>(c.per_trail[u].size())) continue;
-      if (SiblingAbsent(c, all, path, p, c.per_trail[u][j].mid_s, u, dash_flux_dn / a_dash.duration_s, trail_of))
+      const double seed_s = c.per_trail[u][j].mid_s, star_flux_per_s = dash_flux_dn / a_dash.duration_s;
+      if (SiblingAbsent(c, all, path, p, seed_s, u, star_flux_per_s, trail_of)) {
+        // Absence numbers the trail only where the reading shows no other trail of the star: one shown and
+        // one absent says a trail is hidden (its dashes merged or lost), not that the reading is wrong.
+        const FlowStar shown = CollectAlongFlow(c, all, path, p, seed_s, star_flux_per_s, every_trail & ~(1u << u), nullptr);
+        for (const auto& images : shown.taken)
+          if (static_cast<int>(images.size()) >= kShownImages) return false;
         continue;
+      }
       if (trail >= 0) return false;
       trail = u;
     }

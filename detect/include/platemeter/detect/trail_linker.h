@@ -150,6 +150,10 @@ struct TrailOptions {
                                        // star's) seeds too (not a slow star's): each reading takes the star's
                                        // flux per second from its own images, then needs the usual evidence
                                        // (docs/trails.md, "The plate's flow" 3)
+  bool flow_lone_held_dashes = true;  // a lone trail's run goes on over a dash's place held by an image not
+                                       // measured as that dash (merged, cut, shaped wrong) where the place
+                                       // before it holds one of the run's dashes (docs/trails.md, "The
+                                       // plate's flow" 4)
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
   // beyond it (trail 3 minus one dash looks like a complete trail 2): the position one dash before
   // the run must lie inside by edge_margin_px, else the run is refused. Unset (max <= min):

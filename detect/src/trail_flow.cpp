@@ -31,29 +31,31 @@ PixelPoint MedianOffset(const Context& c, const FlowPath& path, const std::vecto
   return {detect_internal::Median(dx), detect_internal::Median(dy)};
 }
 
-// The median, over a reading's evidence images besides the seed, of measured flux / (the seed's flux per
-// second x the exposure's duration): near 1 when the seed's flux is the star's (a seed merged with another
-// image reads about 0.5).
-double FluxRatio(const Context& c, const std::vector<std::vector<std::pair<int, int>>>& taken, int seed,
-                 double flux_per_s) {
-  std::vector<double> ratio;
+// Flux / duration of each of a reading's evidence images besides the seed.
+std::vector<double> EvidenceRates(const Context& c, const std::vector<std::vector<std::pair<int, int>>>& taken,
+                                  int seed) {
+  std::vector<double> rate_dn_per_s;
   for (size_t t = 0; t < taken.size(); ++t)
     for (const auto& [j, i] : taken[t])
-      if (i != seed && IsEvidence(c, i)) ratio.push_back(c.images[i].flux_dn / (flux_per_s * c.per_trail[t][j].duration_s));
-  return ratio.empty() ? 0.0 : detect_internal::Median(ratio);
+      if (i != seed && IsEvidence(c, i)) rate_dn_per_s.push_back(c.images[i].flux_dn / c.per_trail[t][j].duration_s);
+  return rate_dn_per_s;
+}
+
+// The median of those rates over the seed's flux per second: near 1 when the seed's flux is the star's (a
+// seed merged with another image reads about 0.5).
+double FluxRatio(const Context& c, const std::vector<std::vector<std::pair<int, int>>>& taken, int seed,
+                 double flux_per_s) {
+  const std::vector<double> rate_dn_per_s = EvidenceRates(c, taken, seed);
+  return rate_dn_per_s.empty() ? 0.0 : detect_internal::Median(rate_dn_per_s) / flux_per_s;
 }
 
 // The star's flux per second from a reading's own images, for a blended seed (its flux shared with the
-// neighbour it was fitted with): the median of flux / duration over the evidence images besides the seed;
-// 0 with fewer than 5.
+// neighbour it was fitted with): the median rate of the images with a flux; 0 with fewer than 5.
 double ImagesFluxPerSecond(const Context& c, const FlowStar& s, int seed) {
   constexpr size_t kMinImages = 5;
-  std::vector<double> rate;
-  for (size_t t = 0; t < s.taken.size(); ++t)
-    for (const auto& [j, i] : s.taken[t])
-      if (i != seed && IsEvidence(c, i) && c.images[i].flux_dn > 0)
-        rate.push_back(c.images[i].flux_dn / c.per_trail[t][j].duration_s);
-  return rate.size() < kMinImages ? 0.0 : detect_internal::Median(rate);
+  std::vector<double> rate_dn_per_s = EvidenceRates(c, s.taken, seed);
+  std::erase_if(rate_dn_per_s, [](double r) { return !(r > 0); });
+  return rate_dn_per_s.size() < kMinImages ? 0.0 : detect_internal::Median(rate_dn_per_s);
 }
 }  // namespace
 

@@ -165,6 +165,9 @@ const MeasuredPoint& DominantTruth(const Field& field, size_t k) {
   return *field.all[dominant].truth;
 }
 
+// The leading dashes of a true image's trail (Table 1 defaults: T1..T4 lead with 2..5).
+int LeadingDashes(const MeasuredPoint& t) { return std::stoi(t.trail.substr(1)) + 1; }
+
 // A merged detection is right only when tagged as its dominant image (a close double star's images
 // coincide all along its trails: the tags hold for both).
 Score ScoreField(const Field& field, const TrailLinkResult& r, bool report) {
@@ -309,7 +312,7 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   for (size_t k = 0; k < field->found.size(); ++k) {
     const MeasuredPoint& t = DominantTruth(*field, k);
     if (t.kind != PointKind::kTrailDash) continue;
-    const int leading = std::stoi(t.trail.substr(1)) + 1;  // (T n leads with n + 1 dashes)
+    const int leading = LeadingDashes(t);
     DetectedStar& d = field->found[k];
     if (*t.dot <= leading) d.flags |= kStarCrowded;
     if (*t.dot == leading + 1) d.flags |= kStarBlended, d.flux_dn *= 1.6;
@@ -347,7 +350,7 @@ TEST(TrailCrowded, LoneTrailsAreNumberedByTheirRunsAlongTheFlow) {
   // there (docs/trails.md, "The plate's flow" 4); more right, none wrong.
   for (size_t k = 0; k < field->found.size(); ++k) {
     const MeasuredPoint& t = DominantTruth(*field, k);
-    const int leading = std::stoi(t.trail.substr(1)) + 1;  // (T n leads with n + 1 dashes)
+    const int leading = LeadingDashes(t);
     if (t.kind != PointKind::kTrailDash || leading < 3 || *t.dot != leading - 1) continue;
     DetectedStar& d = field->found[k];
     d.flux_dn *= 1.5, d.length_px *= 1.6;
@@ -451,8 +454,7 @@ TEST(TrailCrowded, TrailsWithoutTheirLeadingRunAreDecodedFromTheirSiblings) {
   if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
     GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
   auto leading = [](const MeasuredPoint& t) {
-    const int n = std::stoi(t.trail.substr(1)) + 1;  // T1..T4: 2..5 leading dashes (Table 1 defaults)
-    return t.kind == PointKind::kTrailDash && *t.dot <= n;
+    return t.kind == PointKind::kTrailDash && *t.dot <= LeadingDashes(t);
   };
   for (const bool all_trails : {false, true}) {
     const auto field = BuildField(FieldSpec(5.0), [&](const MeasuredPoint& t) {

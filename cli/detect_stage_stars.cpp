@@ -165,16 +165,17 @@ StageOutput RunStarStage(const DetectContext& context) {
     return out;
   }
 
-  const TrailLinkResult linked = LinkTrails(stars, schedule, trail_options);
-  // The decoded trails' undetected dots, measured where their tracks put them.
-  ForcedDotOptions forced_options;
-  forced_options.enabled = request.trails->forced_dots;
+  // The scan's pixels, read in windows: the lone trails' runs and the decoded trails' undetected dots.
   ScanPixels scan;
   scan.read = [&image = context.image](const PixelRect& rect, float* values_dn) { image.ReadWindowInto(rect, values_dn); };
   scan.width_px = context.image.info().width_px, scan.height_px = context.image.info().height_px;
   scan.dark = options.dark;
   scan.low_dn = options.floor_dn;
   scan.high_dn = options.saturation_dn.value_or(context.image.info().full_scale_dn);
+  const TrailLinkResult linked = LinkTrails(stars, schedule, trail_options, &scan);
+  // The decoded trails' undetected dots, measured where their tracks put them.
+  ForcedDotOptions forced_options;
+  forced_options.enabled = request.trails->forced_dots;
   ForcedDotStats forced_stats;
   const std::vector<ForcedDot> forced =
       MeasureMissingDots(scan, stars, linked, schedule, trail_options, forced_options, &forced_stats);

@@ -11,6 +11,7 @@
 
 #include "platemeter/core/error.h"
 #include "median.h"
+#include "scan_window.h"
 #include "star_internal.h"
 #include "trail_internal.h"
 
@@ -18,6 +19,7 @@ namespace platemeter {
 namespace {
 
 using detect_internal::Median;
+using detect_internal::ModelOf;
 
 using trail_internal::Dist;
 using trail_internal::Grid;
@@ -51,17 +53,6 @@ struct Candidate {
   std::vector<star_internal::FittedSegment> neighbours;  // the detected images whose light reaches its window
   int replaces = -1;  // the unassigned detection at the place, re-measured
 };
-
-// A detected image as the detector fitted it (a point image is a segment of length 0).
-star_internal::FittedSegment ModelOf(const DetectedStar& d) {
-  star_internal::FittedSegment m;
-  m.x_px = d.point.position_px.x_px, m.y_px = d.point.position_px.y_px;
-  m.angle_rad = d.angle_deg * std::numbers::pi / 180.0;
-  m.length_px = d.length_px;
-  m.flux_dn = d.flux_dn;
-  m.sigma_px = d.fwhm_px / kFwhmPerSigma;
-  return m;
-}
 
 // What one trail offers: its track and its images' flux per second and width.
 struct TrailModel {
@@ -117,26 +108,11 @@ MeasuredDot Refused(Outcome why) {
 // Fits the dot at its prediction (outcome kMeasured: it is there).
 MeasuredDot MeasureDot(const ScanPixels& scan, const Candidate& c, const ForcedDotOptions& o) {
   const double half_px = 0.5 * c.length_px + o.window_fwhm * c.fwhm_px;
-  const long x0 = static_cast<long>(std::floor(c.predicted.x_px - half_px));
-  const long y0 = static_cast<long>(std::floor(c.predicted.y_px - half_px));
-  const long x1 = static_cast<long>(std::ceil(c.predicted.x_px + half_px));
-  const long y1 = static_cast<long>(std::ceil(c.predicted.y_px + half_px));
-  if (x0 < 0 || y0 < 0 || x1 >= scan.width_px || y1 >= scan.height_px) {
-    return Refused(Outcome::kOutside);
-  }
-  const PixelRect rect{x0, y0, x1 - x0 + 1, y1 - y0 + 1};
-  std::vector<float> values(static_cast<size_t>(rect.width_px * rect.height_px));
-  scan.read(rect, values.data());
-  const double sign = scan.dark ? -1.0 : 1.0;
+  PixelRect rect;
+  if (!detect_internal::WindowAbout(scan, c.predicted, half_px, &rect)) return Refused(Outcome::kOutside);
   std::vector<star_internal::FitPixel> pixels;
-  pixels.reserve(values.size());
-  for (long y = y0; y <= y1; ++y)
-    for (long x = x0; x <= x1; ++x) {
-      const float v = values[static_cast<size_t>((y - y0) * rect.width_px + (x - x0))];
-      if (v <= scan.low_dn || v >= scan.high_dn)  // a saturated neighbour: its light is not the dot's
-        return Refused(Outcome::kClipped);
-      pixels.push_back({static_cast<float>(x), static_cast<float>(y), static_cast<float>(sign * v)});
-    }
+  // (a saturated neighbour: its light is not the dot's)
+  if (!detect_internal::ReadContrast(scan, rect, &pixels)) return Refused(Outcome::kClipped);
   // The neighbours' light (their fitted models) taken off; the background: the window's median (the dot
   // covers a small part of it), then fitted.
   std::vector<double> contrast;
@@ -171,6 +147,7 @@ MeasuredDot MeasureDot(const ScanPixels& scan, const Candidate& c, const ForcedD
   if (std::abs(s.flux_dn - c.expected_flux_dn) > o.flux_tolerance * c.expected_flux_dn + 3.0 * s.sigma_flux_dn) {
     return Refused(Outcome::kOffFlux);
   }
+  const double sign = scan.dark ? -1.0 : 1.0;  // (the background as stored)
   return MeasuredDot{Outcome::kMeasured, s, sign * (level + fit.offset_dn)};
 }
 

@@ -90,6 +90,7 @@ struct Context {
   bool use_lengths = false;
   std::vector<std::vector<ShutterExposure>> per_trail;  // exposures of each trail, time order
   std::vector<int> lines;  // rejected lines with an extent (defects with length_px > 0), for ForReaching
+  const ScanPixels* scan = nullptr;  // the scan's pixels, where the caller has them (a lone run's held dashes)
 };
 
 // How far from q an image predicted by the flow may lie, carried there from origin: the flow's error grows

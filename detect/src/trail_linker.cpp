@@ -274,13 +274,14 @@ int Root(std::vector<int>& parent, int i) {
 }  // namespace
 
 TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCycleScheduleOptions& program,
-                           const TrailOptions& options) {
+                           const TrailOptions& options, const ScanPixels* scan) {
   std::string why;
   if (!options.Check(&why)) throw Error("trail options", why);
   const std::vector<ShutterExposure> schedule = BuildShutterSchedule(program);
   const int trails = static_cast<int>(program.leading_dashes.size());
   Context c{images, options, {}, {}, {}, false, std::vector<std::vector<ShutterExposure>>(trails), {}};
   for (const ShutterExposure& e : schedule) c.per_trail[e.trail - 1].push_back(e);
+  c.scan = scan;
 
   TrailLinkResult result;
   const size_t n = images.size();

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <map>
 
+#include "platemeter/detect/dash_in_pixels.h"
+
 #include "trail_internal.h"
 
 namespace platemeter::trail_internal {
@@ -94,6 +96,29 @@ int DurationsRequired(const Context& c, const FlowPath& path, int trail, double 
   }
   if (!cut || !c.o.flow_cut_trails) return kDurations;
   return std::max(kMinDurationsCut, std::min(kDurations, DistinctCount(on_format_s)));
+}
+
+// What the scan's pixels show at the place of a dash of the star dt from the seed (flow_lone_pixel_dashes;
+// nothing measured without them): its thirds fitted with the light of the detections about it
+// (MeasureDashInPixels).
+DashInPixels DashInScan(const Context& c, const Grid& all, const FlowPath& path, double dt, double dash_length_px,
+                        double dash_flux_dn) {
+  if (!c.o.flow_lone_pixel_dashes || !c.scan) return {};
+  const PixelPoint q = path.At(dt), v = path.VelocityAt(dt);
+  DashPlace place;
+  place.centre_px = q;
+  place.angle_rad = std::atan2(v.y_px, v.x_px);
+  place.length_px = dash_length_px;
+  place.fwhm_px = c.o.psf_fwhm_px;
+  place.flux_dn = dash_flux_dn;
+  const DashInPixelsOptions options;
+  // (every detection whose light may reach the window: the longest a dash-long sweep)
+  const double reach_px = dash_length_px + (options.window_fwhm + 3.0) * place.fwhm_px;
+  std::vector<DetectedStar> near;
+  all.Near(q.x_px, q.y_px, reach_px, [&](int i) {
+    if (c.usable[i]) near.push_back(c.images[i]);
+  });
+  return MeasureDashInPixels(*c.scan, place, near, options);
 }
 
 }  // namespace
@@ -242,12 +267,23 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
       if (!faint) empty = false;
       else faint_flux_dn += h.flux_dn;
     });
-    if (empty && faint_flux_dn < 0.5 * dash_flux) break;
+    if (empty && faint_flux_dn < 0.5 * dash_flux) {
+      // (not where the pixels show a dash there: merged into another star's image the flux rule let
+      // through, or no detection at all)
+      const DashInPixels seen = DashInScan(c, all, path, last_dash_s - 30.0 * m, dash_length, dash_flux);
+      if (seen.shown) return false;
+      break;
+    }
     // Something at dash m's place: the run's own dash mismeasured (merged with a neighbour, cut, shaped
     // wrong) where the run goes on, one dash (single, or the last of merged ones) at the place before it.
     if (!o.flow_lone_held_dashes) return false;
+    // Where the pixels are there to ask (flow_lone_pixel_dashes): no light of a dash at the place beside the
+    // holder's (a foreign image by the empty place before the run) is the run's end; a dash's light there
+    // (merged with the holder) is the run's own dash as above.
+    const DashInPixels seen = DashInScan(c, all, path, last_dash_s - 30.0 * m, dash_length, dash_flux);
+    if (seen.absent) break;
     const Explained next = explain(m + 1);
-    if (next.k <= 0 || next.off) return false;
+    if ((next.k <= 0 || next.off) && !seen.shown) return false;
     ++m;  // dash m held by an image not its own measurement: not tagged
     continue;
   }

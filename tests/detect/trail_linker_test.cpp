@@ -75,6 +75,21 @@ struct BandRun {
   std::vector<float> values;                // the band's pixels (rows y0..y0 + h), DN
 };
 
+// The band's pixels as a scan (rows outside the band are off it: the band's rows only).
+ScanPixels BandPixels(const BandRun& b) {
+  ScanPixels scan;
+  scan.read = [&b](const PixelRect& rect, float* values_dn) {
+    for (long y = 0; y < rect.height_px; ++y)
+      std::copy_n(&b.values[static_cast<size_t>((rect.y0_px + y - b.y0) * b.w + rect.x0_px)], rect.width_px,
+                  values_dn + y * rect.width_px);
+  };
+  scan.width_px = b.w;
+  scan.height_px = b.y0 + b.h;
+  scan.dark = true;
+  scan.high_dn = 65535.0;
+  return scan;
+}
+
 BandRun RunBand(const std::string& spec, double pixel_um, long band_rows, double threshold_sigma) {
   BandRun b;
   b.plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(spec, "trails.toml"), DefinitionRegistry());
@@ -104,7 +119,8 @@ BandRun RunBand(const std::string& spec, double pixel_um, long band_rows, double
   to.image_min_px = {0.0, static_cast<double>(b.y0)};
   to.image_max_px = {b.w - 1.0, static_cast<double>(b.y0 + b.h - 1)};
   b.options = to;
-  b.r = LinkTrails(b.found, DutyCycleScheduleOptions{}, to);
+  const ScanPixels scan = BandPixels(b);  // (a lone trail's run counted in the pixels where detections cannot)
+  b.r = LinkTrails(b.found, DutyCycleScheduleOptions{}, to, &scan);
 
   for (const MeasuredPoint& t : b.plate.truth)
     if (t.kind == PointKind::kTrailDot || t.kind == PointKind::kTrailDash) b.truth.push_back(&t);
@@ -298,21 +314,6 @@ TEST(TrailLinker, TheSiderealFitExposesDisplacedDots) {
   std::printf("[bad dots] %zu dots moved by 1 px across their track, %ld exposed, %ld other images newly flagged bad\n",
               moved.size(), exposed, false_bad);
   EXPECT_EQ(false_bad, 0);
-}
-
-// The band's pixels as a scan (rows outside the band are off it: the band's rows only).
-ScanPixels BandPixels(const BandRun& b) {
-  ScanPixels scan;
-  scan.read = [&b](const PixelRect& rect, float* values_dn) {
-    for (long y = 0; y < rect.height_px; ++y)
-      std::copy_n(&b.values[static_cast<size_t>((rect.y0_px + y - b.y0) * b.w + rect.x0_px)], rect.width_px,
-                  values_dn + y * rect.width_px);
-  };
-  scan.width_px = b.w;
-  scan.height_px = b.y0 + b.h;
-  scan.dark = true;
-  scan.high_dn = 65535.0;
-  return scan;
 }
 
 // A decoded trail's dots the detector missed are measured where the trail's track puts them. The band of

@@ -11,12 +11,12 @@
 // bright as the trail's other images say it must be. What is near another
 // image (detected or predicted) is not measured: its light is not the dot's
 // alone.
-#include <functional>
 #include <string>
 #include <vector>
 
 #include "platemeter/core/duty_cycle.h"
 #include "platemeter/core/pixel.h"
+#include "platemeter/detect/scan_pixels.h"
 #include "platemeter/detect/star_detector.h"
 #include "platemeter/detect/trail_linker.h"
 
@@ -38,17 +38,6 @@ struct ForcedDotOptions {
   bool remeasure = true;           // a detection the linker left unassigned (not contested) alone at the place,
   double remeasure_radius_px = 1.0;  // px; within this of the prediction, is fitted there as the dot (replaces)        // a trail's track is used with at least this many measured images
   bool Check(std::string* why) const;
-};
-
-// Reads the pixels of `rect` (inside the scan) into values_dn, row-major, in DN.
-using WindowReader = std::function<void(const PixelRect& rect, float* values_dn)>;
-
-struct ScanPixels {
-  WindowReader read;
-  long width_px = 0, height_px = 0;
-  bool dark = true;                // star images darker than the background (a negative)
-  double low_dn = 0.0;             // DN; pixels at or below are clipped (dark images at the film's floor)
-  double high_dn = 65535.0;        // DN; pixels at or above are clipped (saturated)
 };
 
 // One dot measured at its track's prediction: the image (kind star, measured, length_px the sweep's

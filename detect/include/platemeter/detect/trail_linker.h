@@ -60,6 +60,7 @@
 
 #include "platemeter/core/duty_cycle.h"
 #include "platemeter/core/pixel.h"
+#include "platemeter/detect/scan_pixels.h"
 #include "platemeter/detect/star_detector.h"
 
 namespace platemeter {
@@ -154,6 +155,10 @@ struct TrailOptions {
                                        // measured as that dash (merged, cut, shaped wrong) where the place
                                        // before it holds one of the run's dashes (docs/trails.md, "The
                                        // plate's flow" 4)
+  bool flow_lone_pixel_dashes = true;  // where LinkTrails is given the scan, a lone run's places are asked of
+                                       // its pixels too (the dash's thirds fitted: dash_in_pixels.h): a held
+                                       // place with no dash's light ends the run, one with it continues it,
+                                       // and a place the detections leave empty must not show a dash
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
   // beyond it (trail 3 minus one dash looks like a complete trail 2): the position one dash before
   // the run must lie inside by edge_margin_px, else the run is refused. Unset (max <= min):
@@ -235,7 +240,9 @@ struct TrailLinkResult {
 // measured stars (rejected, defects) are left unassigned ("not_star").
 // Uses DetectedStar::length_px when set (trail-mode detection). Throws Error
 // for invalid options.
+// `scan`, where given, lets a lone trail's run be counted in the pixels where detections cannot say
+// (flow_lone_pixel_dashes).
 TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCycleScheduleOptions& program,
-                           const TrailOptions& options = {});
+                           const TrailOptions& options = {}, const ScanPixels* scan = nullptr);
 
 }  // namespace platemeter

@@ -1,0 +1,52 @@
+// A window of the scan read as fit pixels (scan_window.h).
+#include "scan_window.h"
+
+#include <cmath>
+#include <numbers>
+
+namespace platemeter::detect_internal {
+
+bool WindowAbout(const ScanPixels& scan, const PixelPoint& centre, double half_px, PixelRect* rect) {
+  const long x0 = static_cast<long>(std::floor(centre.x_px - half_px));
+  const long y0 = static_cast<long>(std::floor(centre.y_px - half_px));
+  const long x1 = static_cast<long>(std::ceil(centre.x_px + half_px));
+  const long y1 = static_cast<long>(std::ceil(centre.y_px + half_px));
+  if (x0 < 0 || y0 < 0 || x1 >= scan.width_px || y1 >= scan.height_px) return false;
+  *rect = PixelRect{x0, y0, x1 - x0 + 1, y1 - y0 + 1};
+  return true;
+}
+
+bool ReadContrast(const ScanPixels& scan, const PixelRect& rect, std::vector<star_internal::FitPixel>* pixels,
+                  std::vector<PixelPoint>* clipped) {
+  std::vector<float> values(static_cast<size_t>(rect.width_px * rect.height_px));
+  scan.read(rect, values.data());
+  const double sign = scan.dark ? -1.0 : 1.0;
+  pixels->clear();
+  if (clipped) clipped->clear();
+  pixels->reserve(values.size());
+  for (long y = 0; y < rect.height_px; ++y)
+    for (long x = 0; x < rect.width_px; ++x) {
+      const float v = values[static_cast<size_t>(y * rect.width_px + x)];
+      const double x_px = static_cast<double>(rect.x0_px + x), y_px = static_cast<double>(rect.y0_px + y);
+      if (v <= scan.low_dn || v >= scan.high_dn) {
+        if (!clipped) return false;
+        clipped->push_back({x_px, y_px});
+        continue;
+      }
+      pixels->push_back({static_cast<float>(x_px), static_cast<float>(y_px), static_cast<float>(sign * v)});
+    }
+  return true;
+}
+
+star_internal::FittedSegment ModelOf(const DetectedStar& d) {
+  constexpr double kFwhmPerSigma = 2.3548200450309493;
+  star_internal::FittedSegment m;
+  m.x_px = d.point.position_px.x_px, m.y_px = d.point.position_px.y_px;
+  m.angle_rad = d.angle_deg * std::numbers::pi / 180.0;
+  m.length_px = d.length_px;
+  m.flux_dn = d.flux_dn;
+  m.sigma_px = d.fwhm_px / kFwhmPerSigma;
+  return m;
+}
+
+}  // namespace platemeter::detect_internal

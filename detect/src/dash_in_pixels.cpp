@@ -13,18 +13,11 @@
 namespace platemeter {
 namespace {
 
-constexpr double kFwhmPerSigma = 2.3548200450309493;
+using star_internal::kFwhmPerSigma;
 constexpr double kSigmaPerMad = 1.4826;  // a Gaussian's sigma per median absolute deviation
 // A detection with less than this fraction of its light in the window is not modelled (its column would
 // be next to zero).
 constexpr double kMinLightInWindow = 0.02;
-
-// Distance from p to the segment of half-length h along direction (c, s) about centre.
-double ToSegment(const PixelPoint& p, const PixelPoint& centre, double c, double s, double h) {
-  const double dx = p.x_px - centre.x_px, dy = p.y_px - centre.y_px;
-  const double along = std::clamp(dx * c + dy * s, -h, h);
-  return std::hypot(dx - along * c, dy - along * s);
-}
 
 // The templates: the sweep's thirds, then every other detection whose light reaches the window (its shape as
 // fitted); unit flux each.
@@ -42,7 +35,8 @@ std::vector<star_internal::FittedSegment> Templates(const DashPlace& dash, const
   }
   for (const DetectedStar& d : images) {
     if (!(d.flux_dn > 0) || !(d.fwhm_px > 0)) continue;
-    if (ToSegment(d.point.position_px, dash.centre_px, c, s, 0.5 * dash.length_px) <= o.on_sweep_fwhm * dash.fwhm_px)
+    if (detect_internal::ToSweep_px(d.point.position_px, dash.centre_px, dash.angle_rad, dash.length_px) <=
+        o.on_sweep_fwhm * dash.fwhm_px)
       continue;
     star_internal::FittedSegment m = detect_internal::ModelOf(d);
     // (its light in the window: beyond the window's edge by more than its reach, none)
@@ -118,9 +112,10 @@ DashInPixels MeasureDashInPixels(const ScanPixels& scan, const DashPlace& dash, 
       !detect_internal::ReadContrast(scan, rect, &pixels, &clipped))
     return out;
   // (a saturated neighbour's core is left out; light of the dash's own lost there would read as less)
-  const double c = std::cos(dash.angle_rad), s = std::sin(dash.angle_rad);
   for (const PixelPoint& q : clipped)
-    if (ToSegment(q, dash.centre_px, c, s, 0.5 * dash.length_px) <= o.clear_of_clipped_fwhm * dash.fwhm_px) return out;
+    if (detect_internal::ToSweep_px(q, dash.centre_px, dash.angle_rad, dash.length_px) <=
+        o.clear_of_clipped_fwhm * dash.fwhm_px)
+      return out;
   const FluxFit fit = FitFluxes(pixels, Templates(dash, rect, images, o));
   if (!fit.ok) return out;
 

@@ -1,6 +1,7 @@
 // A window of the scan read as fit pixels (scan_window.h).
 #include "scan_window.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -38,14 +39,20 @@ bool ReadContrast(const ScanPixels& scan, const PixelRect& rect, std::vector<sta
   return true;
 }
 
+double ToSweep_px(const PixelPoint& p, const PixelPoint& centre, double angle_rad, double length_px) {
+  const double c = std::cos(angle_rad), s = std::sin(angle_rad), h = 0.5 * length_px;
+  const double dx = p.x_px - centre.x_px, dy = p.y_px - centre.y_px;
+  const double along = std::clamp(dx * c + dy * s, -h, h);
+  return std::hypot(dx - along * c, dy - along * s);
+}
+
 star_internal::FittedSegment ModelOf(const DetectedStar& d) {
-  constexpr double kFwhmPerSigma = 2.3548200450309493;
   star_internal::FittedSegment m;
   m.x_px = d.point.position_px.x_px, m.y_px = d.point.position_px.y_px;
   m.angle_rad = d.angle_deg * std::numbers::pi / 180.0;
   m.length_px = d.length_px;
   m.flux_dn = d.flux_dn;
-  m.sigma_px = d.fwhm_px / kFwhmPerSigma;
+  m.sigma_px = d.fwhm_px / star_internal::kFwhmPerSigma;
   return m;
 }
 

@@ -20,6 +20,9 @@ bool WindowAbout(const ScanPixels& scan, const PixelPoint& centre, double half_p
 bool ReadContrast(const ScanPixels& scan, const PixelRect& rect, std::vector<star_internal::FitPixel>* pixels,
                   std::vector<PixelPoint>* clipped = nullptr);
 
+// Distance from p to a sweep: the segment of length_px along angle_rad about centre.
+double ToSweep_px(const PixelPoint& p, const PixelPoint& centre, double angle_rad, double length_px);
+
 // A detected image as the detector fitted it (a point image is a segment of length 0).
 star_internal::FittedSegment ModelOf(const DetectedStar& d);
 

@@ -24,7 +24,7 @@ using star_internal::FitPixel;
 using star_internal::FittedGaussian;
 using star_internal::GaussianFitResult;
 
-constexpr double kFwhmPerSigma = 2.3548200450309493;
+using star_internal::kFwhmPerSigma;
 
 struct Band {
   const float* raw = nullptr;

@@ -6,6 +6,8 @@
 
 namespace platemeter::star_internal {
 
+constexpr double kFwhmPerSigma = 2.3548200450309493;  // a Gaussian's FWHM per sigma
+
 // Background and noise of a band on a mesh of cells (absolute cell rows).
 struct BackgroundMesh {
   int cell_px = 64;

@@ -25,14 +25,11 @@ using trail_internal::Dist;
 using trail_internal::Grid;
 using trail_internal::Track;
 
-constexpr double kFwhmPerSigma = 2.3548200450309493;
+using star_internal::kFwhmPerSigma;
 
 // Distance from p to the segment of an image (its sweep: length_px along angle_deg about its centre).
 double ToSweep(const PixelPoint& p, const DetectedStar& d) {
-  const double a = d.angle_deg * std::numbers::pi / 180.0, h = 0.5 * d.length_px;
-  const double dx = p.x_px - d.point.position_px.x_px, dy = p.y_px - d.point.position_px.y_px;
-  const double along = std::clamp(dx * std::cos(a) + dy * std::sin(a), -h, h);
-  return std::hypot(dx - along * std::cos(a), dy - along * std::sin(a));
+  return detect_internal::ToSweep_px(p, d.point.position_px, d.angle_deg * std::numbers::pi / 180.0, d.length_px);
 }
 
 // The exposure an assigned image was tagged as.

@@ -20,5 +20,7 @@ void RegisterSimulateCommand(CLI::App& app, GlobalOptions& global);
 void RegisterDetectCommand(CLI::App& app, GlobalOptions& global);
 void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global);  // measure and validate
 void RegisterBatchCommand(CLI::App& app, GlobalOptions& global);    // batch: whole archives (docs/batch.md)
+void RegisterCamerasCommand(CLI::App& app, GlobalOptions& global);  // cameras profile (after RegisterGridsCommand)
+void RegisterCalibrateCommand(CLI::App& app, GlobalOptions& global);  // calibrate bundle (docs/bundle-job.md)
 
 }  // namespace platemeter::cli

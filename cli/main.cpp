@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
   cli::RegisterDetectCommand(app, global);
   cli::RegisterMeasureCommand(app, global);
   cli::RegisterBatchCommand(app, global);
+  cli::RegisterCamerasCommand(app, global);
+  cli::RegisterCalibrateCommand(app, global);
 
   try {
     app.parse(argc, argv);

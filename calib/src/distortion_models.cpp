@@ -49,7 +49,7 @@ bool ParseDistortionModel(const std::string& name, DistortionModelId* id) {
   for (DistortionModelId candidate :
        {DistortionModelId::kNone, DistortionModelId::kSmacRadialDecentering,
         DistortionModelId::kBrownConrady, DistortionModelId::kBrownBalanced,
-        DistortionModelId::kSlama}) {
+        DistortionModelId::kSlama, DistortionModelId::kBrownAffine}) {
     if (name == DistortionModelName(candidate)) {
       *id = candidate;
       return true;

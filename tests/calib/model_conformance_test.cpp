@@ -38,6 +38,15 @@ struct ModelCase<BrownConrady> {
 };
 
 template <>
+struct ModelCase<BrownAffine> {
+  // Brown's terms as above plus a 1e-4 scale difference and a 2e-4 shear.
+  static std::vector<double> Params() {
+    return {1.5614e-5, -2.0e-10, 3.0e-14, 3.604e-6, -2.998e-6, -1.0e-4, 2.0e-4};
+  }
+  static constexpr double kHalfFormat_mm = 27.5;
+};
+
+template <>
 struct ModelCase<BrownBalanced> {
   // Seed 000, Table 6 (stellar SMAC, balanced at r = 30 mm).
   static std::vector<double> Params() { return {-0.14741e-1, +0.17241e-4, -0.95765e-9, 0.3858e-5, 0.1241e-5}; }
@@ -70,7 +79,8 @@ class DistortionModelConformance : public ::testing::Test {
   }
 };
 
-using Models = ::testing::Types<SmacRadialDecentering, BrownConrady, BrownBalanced, SlamaDistortion>;
+using Models =
+    ::testing::Types<SmacRadialDecentering, BrownConrady, BrownAffine, BrownBalanced, SlamaDistortion>;
 TYPED_TEST_SUITE(DistortionModelConformance, Models);
 
 TYPED_TEST(DistortionModelConformance, DeclaresItsParameters) {

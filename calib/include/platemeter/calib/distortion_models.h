@@ -83,6 +83,29 @@ struct BrownConrady {
 };
 
 // ---------------------------------------------------------------------------
+// Seed 000 eq. (1) with an affinity of the image frame: Brown's correction plus
+//   dx += b1 xb + b2 yb      (dy unchanged)
+// b1 absorbs a different scale of x and y (seed 001's Cx != Cy: a measured x
+// that is (1 + s) times the ideal one is corrected by b1 = -s), b2 a
+// non-orthogonality of the axes (seed 001's epsilon: x* = x - y epsilon is
+// corrected by b2 = +epsilon). kCorrection, like BrownConrady. The bundle
+// adjustment's camera: c, xp, yp (InteriorOrientation) and these seven.
+// Parameters: k1 [1/mm^2], k2 [1/mm^4], k3 [1/mm^6], p1 [1/mm], p2 [1/mm], b1 [-], b2 [-].
+struct BrownAffine {
+  static constexpr int kNumParams = 7;
+  static constexpr DistortionDirection kDirection = DistortionDirection::kCorrection;
+  static constexpr std::array<const char*, kNumParams> kParamNames = {
+      "k1_per_mm2", "k2_per_mm4", "k3_per_mm6", "p1_per_mm", "p2_per_mm", "b1", "b2"};
+  static const char* Name() { return "brown-affine"; }
+
+  template <typename T>
+  static void Apply(const T* params, const T& x_mm, const T& y_mm, T* dx_mm, T* dy_mm) {
+    BrownConrady::Apply(params, x_mm, y_mm, dx_mm, dy_mm);
+    *dx_mm += params[5] * x_mm + params[6] * y_mm;
+  }
+};
+
+// ---------------------------------------------------------------------------
 // Seed 000, eq. (14)-(15) and Tables 1, 3, 6: the "balanced" form that goes with
 // the calibrated focal length c'. The radial function
 //   delta_r' = k0' r + k1' r^3 + k2' r^5            (mm; eq. 14 with Table 6's k2')
@@ -310,7 +333,14 @@ bool MeasuredFromIdeal(const T* params, const T& x_mm, const T& y_mm, T* measure
 
 // ---------------------------------------------------------------------------
 // Run-time choice of a model (camera definitions name it by string).
-enum class DistortionModelId { kNone, kSmacRadialDecentering, kBrownConrady, kBrownBalanced, kSlama };
+enum class DistortionModelId {
+  kNone,
+  kSmacRadialDecentering,
+  kBrownConrady,
+  kBrownBalanced,
+  kSlama,
+  kBrownAffine
+};
 
 // The identity model (no distortion), so that a camera without a lens
 // calibration goes through the same code.
@@ -331,7 +361,7 @@ const char* DistortionModelName(DistortionModelId id);
 int DistortionModelNumParams(DistortionModelId id);
 std::vector<std::string> DistortionModelParamNames(DistortionModelId id);
 // Accepts the names returned by Name() ("none", "smac-radial-decentering",
-// "brown-conrady", "brown-balanced", "orbigon-11"); false otherwise.
+// "brown-conrady", "brown-balanced", "orbigon-11", "brown-affine"); false otherwise.
 bool ParseDistortionModel(const std::string& name, DistortionModelId* id);
 
 // Calls f(Model{}) with the struct for `id`, e.g. to build an AutoDiffCostFunction
@@ -344,6 +374,7 @@ decltype(auto) VisitDistortionModel(DistortionModelId id, F&& f) {
     case DistortionModelId::kBrownConrady: return f(BrownConrady{});
     case DistortionModelId::kBrownBalanced: return f(BrownBalanced{});
     case DistortionModelId::kSlama: return f(SlamaDistortion{});
+    case DistortionModelId::kBrownAffine: return f(BrownAffine{});
     case DistortionModelId::kNone: break;
   }
   return f(NoDistortion{});

@@ -1,0 +1,40 @@
+#pragma once
+// Options of the self-calibrating bundle adjustment (bundle_adjustment.h), with
+// units and a one-line meaning each (DESIGN.md "Shape of an algorithm").
+#include <string>
+
+namespace platemeter {
+
+// How the datum (the object frame's origin, orientation and scale) is fixed.
+enum class DatumKind {
+  kAuto,              // control points if any point has a prior, else fixed frames if any, else inner constraints
+  kControlPoints,     // by ground points with a-priori coordinates (GroundPoint sigmas)
+  kFixedFrames,       // by frames held fixed (FrameSetup::fixed) plus distances (scale) where given
+  kInnerConstraints,  // free network: minimum trace over the exposure stations (positions and attitudes)
+};
+const char* DatumKindName(DatumKind kind);           // "auto", "control", "fixed-frames", "inner-constraints"
+bool ParseDatumKind(const std::string& name, DatumKind* kind);  // false for an unknown name
+
+struct BundleOptions {
+  DatumKind datum = DatumKind::kAuto;
+  // A robust first pass (Cauchy loss, scale in units of each observation's
+  // sigma) finds gross errors; 0 = no robust pass. Always followed by a plain
+  // weighted pass whose statistics are reported.
+  double robust_loss_scale = 0.0;  // sigma units
+  // After the robust pass, an observation whose normalized residual (residual /
+  // its a-priori sigma, scaled by the pass's sigma0) exceeds this is rejected.
+  double rejection_threshold = 4.0;  // sigma units
+  int max_iterations = 100;          // Levenberg-Marquardt iterations per pass
+  double function_tolerance = 1e-12;  // relative change of the cost that ends a pass
+  // Correlations of the inner cone (and of any reported block) at or above
+  // this magnitude are named in the report.
+  double correlation_threshold = 0.9;  // |rho|
+  double significance_level = 0.05;    // alpha of the chi-square and t tests
+  // An eigenvalue of the diagonally scaled reduced normal matrix below this
+  // times the largest counts as zero (numerical rank).
+  double rank_tolerance = 1e-12;     // relative
+  int num_threads = 0;               // 0 = every core
+  bool Check(std::string* why) const;
+};
+
+}  // namespace platemeter

@@ -1,0 +1,50 @@
+#pragma once
+// The bundle adjustment's outputs (docs/calibration-output.md):
+//   calibration.json   every parameter by its model name with value and sigma,
+//                      sigma0 with its degrees of freedom, the chi-square test,
+//                      the inner cone's correlation matrix, the rank report,
+//                      per-frame and per-point residual RMS, the worst
+//                      observations, the warnings of the checks;
+//   report.md          seed 000 Tables 1-4 in form: the calibration constants
+//                      with their sigmas, the balanced radial and decentering
+//                      profiles with propagated sigmas, then the adjustment's
+//                      statistics, correlations, tests and rank report;
+//   residuals.csv      one row per observation;
+//   camera-NAME.toml   the calibrated camera as a definition (lens model
+//                      brown-affine, sigmas) that --definitions loads.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "platemeter/calib/bundle_adjustment.h"
+#include "platemeter/calib/bundle_input_io.h"
+#include "platemeter/grids/definitions.h"
+
+namespace platemeter {
+
+struct BundleReportOptions {
+  std::string title = "Self-calibrating bundle adjustment";
+  // mm; the radial profile is balanced to zero at this radius (seed 000 Tables
+  // 2, 4, 7 use 30 mm); none: equal positive and negative lobes over the format.
+  std::optional<double> balance_radius_mm;
+  std::vector<double> profile_radii_mm;  // mm; empty: 0 to the format's corner in 10 steps
+  int worst_observations = 20;           // listed in the JSON and the report
+  std::vector<BundleWarning> warnings;   // what the checks left out
+  std::string software = "platemeter";
+  bool Check(std::string* why) const;
+};
+
+// The calibrated camera of result.cameras[index] as a camera definition.
+CameraDefinition CalibratedCameraDefinition(const BundleResult& result, int index, const std::string& source);
+
+std::string FormatCalibrationJson(const BundleResult& result, const BundleReportOptions& options);
+std::string FormatBundleReportMarkdown(const BundleResult& result, const BundleReportOptions& options);
+// frame,point_id,status,x_residual_um,y_residual_um,x_normalized,y_normalized,origin,reason
+std::string FormatBundleResidualsCsv(const BundleResult& result);
+
+// Writes every output into `dir` (created if needed), each file atomically;
+// returns the paths written. Throws Error naming the file on failure.
+std::vector<std::string> WriteBundleOutputs(const std::string& dir, const BundleResult& result,
+                                            const BundleReportOptions& options);
+
+}  // namespace platemeter

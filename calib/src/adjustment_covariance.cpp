@@ -1,0 +1,270 @@
+// Covariance and rank of the reduced normal equations (adjustment.h): the
+// diagonally scaled matrix's eigen-decomposition gives the numerical rank,
+// the (near-)null space named in parameter words, and a pseudo-inverse that
+// is the covariance of every estimable parameter; a free network's datum is
+// applied by an S-transformation to minimum trace over the chosen rows.
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <fmt/format.h>
+
+#include "adjustment_internal.h"
+
+namespace platemeter {
+namespace {
+
+// Which words a parameter contributes to: "c_mm" when its group has one
+// block, else "the frames' X_m" (or "frame 9515 X_m" when one block holds it).
+struct ParameterWords {
+  std::string single;  // block label + name
+  std::string group;   // the group's plural + name, or the name alone for a one-block group
+};
+
+std::vector<ParameterWords> WordsOf(const AdjustmentProblem::Impl& impl, const std::vector<int>& free_cols) {
+  std::map<std::string, int> blocks_in_group;
+  for (const AdjustmentBlock& b : impl.blocks) {
+    if (b.kind != BlockKind::kPoint) ++blocks_in_group[b.group];
+  }
+  std::vector<ParameterWords> words(impl.num_global);
+  for (const AdjustmentBlock& b : impl.blocks) {
+    if (b.kind == BlockKind::kPoint) continue;
+    for (size_t i = 0; i < b.names.size(); ++i) {
+      ParameterWords& w = words[b.global_offset + i];
+      w.single = blocks_in_group[b.group] == 1 ? b.names[i] : b.label + " " + b.names[i];
+      w.group = blocks_in_group[b.group] == 1 ? b.names[i] : "the " + b.group + "s' " + b.names[i];
+    }
+  }
+  std::vector<ParameterWords> out;
+  for (int c : free_cols) out.push_back(words[c]);
+  return out;
+}
+
+// A unit direction in the scaled parameter space, in words: the shares of its
+// squared components by parameter group, the largest first.
+NullDirection Describe(const Eigen::VectorXd& direction, const std::vector<ParameterWords>& words) {
+  std::map<std::string, double> by_group;
+  std::map<std::string, std::map<std::string, double>> singles;
+  for (int i = 0; i < direction.size(); ++i) {
+    const double share = direction[i] * direction[i];
+    by_group[words[i].group] += share;
+    singles[words[i].group][words[i].single] += share;
+  }
+  NullDirection out;
+  for (const auto& [group, share] : by_group) {
+    std::string name = group;
+    for (const auto& [single, s] : singles[group]) {
+      if (s > 0.8 * share) name = single;  // one block carries it: name that block
+    }
+    out.shares.emplace_back(name, share);
+  }
+  std::sort(out.shares.begin(), out.shares.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+  for (size_t i = 0; i < out.shares.size() && i < 5; ++i) {
+    if (out.shares[i].second < 0.05) break;
+    if (i > 0) out.words += " with ";
+    out.words += fmt::format("{} ({:.0f} %)", out.shares[i].first, 100.0 * out.shares[i].second);
+  }
+  return out;
+}
+
+}  // namespace
+
+void ComputeCovarianceAndRank(const AdjustmentProblem::Impl& impl, const ReducedNormals& normals,
+                              const AdjustmentOptions& options, AdjustmentResult* result) {
+  // Every non-point parameter, in block order (index == global column).
+  std::vector<int> free_cols;
+  for (const AdjustmentBlock& b : impl.blocks) {
+    if (b.kind == BlockKind::kPoint) continue;
+    for (size_t i = 0; i < b.names.size(); ++i) {
+      ParameterEstimate p;
+      p.block = b.label;
+      p.group = b.group;
+      p.name = b.names[i];
+      p.value = b.values[i];
+      p.initial = b.initial[i];
+      const ParameterState& state = b.states[i];
+      p.status = state.kind == ParameterState::Kind::kFixed ? EstimateStatus::kFixed
+                 : b.has_prior[i]                           ? EstimateStatus::kWeighted
+                                                            : EstimateStatus::kFree;
+      if (state.kind == ParameterState::Kind::kWeighted && state.sigma > 0.0) p.prior_sigma = state.sigma;
+      if (p.status != EstimateStatus::kFixed) free_cols.push_back(b.global_offset + static_cast<int>(i));
+      result->parameters.push_back(std::move(p));
+    }
+  }
+  const int n = static_cast<int>(free_cols.size());
+  RankReport& rank = result->rank;
+  rank.num_parameters = n;
+  result->covariance_row.assign(result->parameters.size(), -1);
+  if (n == 0) return;
+
+  Eigen::MatrixXd N(n, n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) N(i, j) = normals.n_gg(free_cols[i], free_cols[j]);
+  }
+  const std::vector<ParameterWords> words = WordsOf(impl, free_cols);
+  Eigen::VectorXd inv_sqrt_d(n);
+  const double largest_diagonal = N.diagonal().maxCoeff();
+  rank.structural_rank = n;
+  for (int i = 0; i < n; ++i) {
+    if (!(N(i, i) > 1e-300 * std::max(1.0, largest_diagonal))) {
+      rank.untouched.push_back(words[i].single);
+      --rank.structural_rank;
+      inv_sqrt_d[i] = 1.0;
+    } else {
+      inv_sqrt_d[i] = 1.0 / std::sqrt(N(i, i));
+    }
+  }
+  const Eigen::MatrixXd S = inv_sqrt_d.asDiagonal() * N * inv_sqrt_d.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(S);
+  const Eigen::VectorXd& lambda = eigen.eigenvalues();  // ascending
+  const Eigen::MatrixXd& V = eigen.eigenvectors();
+  const double lambda_max = std::max(lambda[n - 1], 1e-300);
+  std::vector<int> null_cols, weak_cols;
+  double smallest_kept = lambda_max;
+  for (int i = 0; i < n; ++i) {
+    if (lambda[i] <= options.rank_tolerance * lambda_max) {
+      null_cols.push_back(i);
+    } else {
+      smallest_kept = std::min(smallest_kept, lambda[i]);
+      if (lambda[i] <= options.weak_tolerance * lambda_max) weak_cols.push_back(i);
+    }
+  }
+  rank.numerical_rank = n - static_cast<int>(null_cols.size());
+
+  rank.condition_number = lambda_max / smallest_kept;
+
+  // Split the null space into the datum's gauge (a free network's choice) and true defects.
+  Eigen::MatrixXd V0(n, null_cols.size());
+  for (size_t k = 0; k < null_cols.size(); ++k) V0.col(k) = V.col(null_cols[k]);
+  Eigen::MatrixXd G;  // gauge rows of the free parameters, in the scaled space
+  Eigen::MatrixXd gauge_basis;  // orthonormal basis of span(G)
+  Eigen::MatrixXd defects = V0;
+  if (impl.gauge.size() > 0) {
+    G.resize(n, impl.gauge.cols());
+    for (int i = 0; i < n; ++i) G.row(i) = impl.gauge.row(free_cols[i]) / inv_sqrt_d[i];
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(G);
+    qr.setThreshold(1e-9);
+    gauge_basis = Eigen::MatrixXd(qr.householderQ()).leftCols(qr.rank());
+  }
+  if (impl.gauge_is_datum) {
+    const Eigen::MatrixXd outside = V0 - gauge_basis * (gauge_basis.transpose() * V0);
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(outside, Eigen::ComputeThinU);
+    int count = 0;
+    for (int k = 0; k < svd.singularValues().size(); ++k) count += svd.singularValues()[k] > 0.5 ? 1 : 0;
+    defects = svd.matrixU().leftCols(count);
+    rank.datum_defect = static_cast<int>(V0.cols()) - count;
+  }
+  for (int k = 0; k < defects.cols(); ++k) {
+    NullDirection d = Describe(defects.col(k), words);
+    d.exact = true;
+    if (gauge_basis.cols() > 0 && (gauge_basis.transpose() * defects.col(k)).norm() > 0.9) {
+      // A datum defect: name the network motion it is.
+      const Eigen::VectorXd a = G.colPivHouseholderQr().solve(defects.col(k));
+      int best = 0;
+      for (int j = 1; j < a.size(); ++j) {
+        if (std::abs(a[j]) * G.col(j).norm() > std::abs(a[best]) * G.col(best).norm()) best = j;
+      }
+      d.words = "the datum: " + impl.gauge_names[best] + " (" + d.words + ")";
+    }
+    rank.directions.push_back(std::move(d));
+  }
+  for (int col : weak_cols) {
+    NullDirection d = Describe(V.col(col), words);
+    d.relative_eigenvalue = lambda[col] / lambda_max;
+    rank.directions.push_back(std::move(d));
+  }
+
+  // Pseudo-inverse over the non-null space, back to parameter units.
+  Eigen::VectorXd inverse_lambda = Eigen::VectorXd::Zero(n);
+  for (int i = 0; i < n; ++i) {
+    if (lambda[i] > options.rank_tolerance * lambda_max) inverse_lambda[i] = 1.0 / lambda[i];
+  }
+  Eigen::MatrixXd Q = inv_sqrt_d.asDiagonal() * (V * inverse_lambda.asDiagonal() * V.transpose()) *
+                      inv_sqrt_d.asDiagonal();
+  if (impl.gauge_is_datum) {
+    // S-transformation to minimum trace over the flagged rows: P = I - G (G^T W G)^-1 G^T W.
+    Eigen::MatrixXd Gp(n, impl.gauge.cols());
+    Eigen::VectorXd w(n);
+    for (int i = 0; i < n; ++i) {
+      Gp.row(i) = impl.gauge.row(free_cols[i]);
+      w[i] = impl.gauge_trace_rows[free_cols[i]] ? 1.0 : 0.0;
+    }
+    const Eigen::MatrixXd GtW = Gp.transpose() * w.asDiagonal();
+    const Eigen::MatrixXd P =
+        Eigen::MatrixXd::Identity(n, n) - Gp * (GtW * Gp).completeOrthogonalDecomposition().solve(GtW);
+    Q = P * Q * P.transpose();
+  }
+  // Parameters with a share of a true defect direction cannot be estimated.
+  std::vector<bool> estimable(n, true);
+  for (int i = 0; i < n; ++i) {
+    if (defects.cols() > 0 && defects.row(i).norm() > 1e-3) estimable[i] = false;
+  }
+  std::vector<int> rows;
+  for (int i = 0; i < n; ++i) {
+    if (estimable[i]) rows.push_back(i);
+    else result->parameters[free_cols[i]].status = EstimateStatus::kNotEstimable;
+  }
+  result->cofactor.resize(rows.size(), rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) {
+    for (size_t j = 0; j < rows.size(); ++j) result->cofactor(i, j) = Q(rows[i], rows[j]);
+    result->covariance_index.push_back(free_cols[rows[i]]);
+    result->covariance_row[free_cols[rows[i]]] = static_cast<int>(i);
+    result->parameters[free_cols[rows[i]]].sigma_unscaled = std::sqrt(std::max(0.0, Q(rows[i], rows[i])));
+  }
+  for (const PointNormals& p : normals.points) {
+    if (p.block < 0) continue;
+    int free = 0;
+    for (int i = 0; i < 3; ++i) free += impl.blocks[p.block].IsFixed(i) ? 0 : 1;
+    if (p.rank < free) ++rank.points_undetermined;
+  }
+}
+
+void ComputePointEstimates(const AdjustmentProblem::Impl& impl, const ReducedNormals& normals,
+                           AdjustmentResult* result) {
+  const double scale = result->sigma0;
+  for (const PointNormals& p : normals.points) {
+    if (p.block < 0) continue;
+    const AdjustmentBlock& block = impl.blocks[p.block];
+    AdjustmentResult::PointEstimate estimate;
+    estimate.label = block.label;
+    estimate.value = Eigen::Vector3d(block.values[0], block.values[1], block.values[2]);
+    estimate.rays = p.rays;
+    int free = 0;
+    for (int i = 0; i < 3; ++i) free += block.IsFixed(i) ? 0 : 1;
+    if (p.rank == free) {
+      // Q_pp = N_pp^-1 + N_pp^-1 N_pg Q_gg N_gp N_pp^-1 over the estimable rows.
+      Eigen::Matrix3d q = p.n_pp_inverse;
+      bool complete = true;
+      std::vector<std::pair<std::vector<int>, Eigen::MatrixXd>> parts;  // (cofactor rows, A = N_pp^-1 N_pb)
+      for (const auto& [b, n_pb] : p.n_pb) {
+        const AdjustmentBlock& other = impl.blocks[b];
+        std::vector<int> rows(other.names.size(), -1);
+        Eigen::MatrixXd a = p.n_pp_inverse * n_pb;
+        for (size_t i = 0; i < other.names.size(); ++i) {
+          const int param = other.global_offset + static_cast<int>(i);
+          rows[i] = result->covariance_row[param];
+          if (rows[i] < 0 && result->parameters[param].status == EstimateStatus::kNotEstimable) complete = false;
+        }
+        parts.emplace_back(std::move(rows), std::move(a));
+      }
+      for (const auto& [rows_a, a] : parts) {
+        for (const auto& [rows_b, b] : parts) {
+          for (size_t i = 0; i < rows_a.size(); ++i) {
+            if (rows_a[i] < 0) continue;
+            for (size_t j = 0; j < rows_b.size(); ++j) {
+              if (rows_b[j] < 0) continue;
+              q.noalias() += result->cofactor(rows_a[i], rows_b[j]) * a.col(i) * b.col(j).transpose();
+            }
+          }
+        }
+      }
+      if (complete) estimate.sigma = scale * q.diagonal().cwiseMax(0.0).cwiseSqrt();
+    }
+    result->points.push_back(std::move(estimate));
+  }
+}
+
+}  // namespace platemeter

@@ -1,0 +1,181 @@
+// Solving an adjustment (adjustment.h): an optional robust pass that rejects
+// gross errors, then the plain weighted pass whose statistics are reported.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "adjustment_internal.h"
+#include "platemeter/core/error.h"
+
+namespace platemeter {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+class ProgressCallback : public ceres::IterationCallback {
+ public:
+  ProgressCallback(const AdjustmentProgress& progress, std::string stage, int max_iterations)
+      : progress_(progress), stage_(std::move(stage)), max_iterations_(max_iterations) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    if (progress_) progress_(stage_, std::min(1.0, double(summary.iteration) / max_iterations_));
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const AdjustmentProgress& progress_;
+  std::string stage_;
+  int max_iterations_;
+};
+
+// The whitened residual vector of one equation at the current values.
+Eigen::VectorXd Whitened(const AdjustmentProblem::Impl& impl, const AdjustmentEquation& equation) {
+  std::vector<const double*> parameters;
+  for (int b : equation.blocks) parameters.push_back(impl.blocks[b].values.data());
+  Eigen::VectorXd r(equation.Dimension());
+  if (!equation.cost->Evaluate(parameters.data(), r.data(), nullptr)) r.setConstant(NAN);
+  return r;
+}
+
+struct CeresRun {
+  ceres::Solver::Summary summary;
+};
+
+void ConfigureSolver(const AdjustmentProblem::Impl& impl, const AdjustmentOptions& options,
+                     ceres::Problem* problem, ceres::Solver::Options* solver) {
+  solver->max_num_iterations = options.max_iterations;
+  solver->function_tolerance = options.function_tolerance;
+  solver->gradient_tolerance = 1e-14;
+  solver->parameter_tolerance = 1e-12;
+  solver->num_threads = options.num_threads > 0 ? options.num_threads
+                                                : std::max(1u, std::thread::hardware_concurrency());
+  solver->logging_type = ceres::SILENT;
+  int free_global = 0;
+  for (const AdjustmentBlock& b : impl.blocks) {
+    if (b.kind == BlockKind::kPoint) continue;
+    for (size_t i = 0; i < b.names.size(); ++i) free_global += b.IsFixed(static_cast<int>(i)) ? 0 : 1;
+  }
+  if (impl.num_points > 0) {
+    // Points first (seed 000's reduction), the inner cone and the frames in the reduced system.
+    auto* ordering = new ceres::ParameterBlockOrdering;
+    for (const AdjustmentBlock& b : impl.blocks) {
+      ordering->AddElementToGroup(const_cast<double*>(b.values.data()), b.kind == BlockKind::kPoint ? 0 : 1);
+    }
+    solver->linear_solver_ordering.reset(ordering);
+    solver->linear_solver_type = free_global <= 3000 ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+  } else {
+    solver->linear_solver_type = free_global <= 1000 ? ceres::DENSE_QR : ceres::SPARSE_NORMAL_CHOLESKY;
+  }
+  (void)problem;
+}
+
+}  // namespace
+
+AdjustmentResult AdjustmentProblem::Solve(const AdjustmentOptions& options, const AdjustmentProgress& progress) {
+  std::string why;
+  if (!options.Check(&why)) throw Error("adjustment options", why);
+  Impl& impl = *impl_;
+  AdjustmentResult result;
+  const auto solve_start = std::chrono::steady_clock::now();
+
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  for (AdjustmentBlock& b : impl.blocks) {
+    const int size = static_cast<int>(b.names.size());
+    problem.AddParameterBlock(b.values.data(), size);
+    std::vector<int> fixed;
+    for (int i = 0; i < size; ++i) {
+      if (b.IsFixed(i)) fixed.push_back(i);
+    }
+    if (static_cast<int>(fixed.size()) == size) {
+      problem.SetParameterBlockConstant(b.values.data());
+    } else if (!fixed.empty()) {
+      problem.SetManifold(b.values.data(), new ceres::SubsetManifold(size, fixed));
+    }
+  }
+  const bool robust = options.robust_loss_scale > 0.0;
+  for (AdjustmentEquation& equation : impl.equations) {
+    if (equation.status != ObservationStatus::kUsed) continue;
+    std::vector<double*> parameters;
+    for (int b : equation.blocks) parameters.push_back(impl.blocks[b].values.data());
+    equation.loss = nullptr;
+    ceres::LossFunction* loss = nullptr;
+    if (!equation.is_prior) {
+      equation.loss = new ceres::LossFunctionWrapper(
+          robust ? new ceres::CauchyLoss(options.robust_loss_scale) : nullptr, ceres::TAKE_OWNERSHIP);
+      loss = equation.loss;
+    }
+    equation.id = problem.AddResidualBlock(equation.cost.get(), loss, parameters);
+  }
+
+  ceres::Solver::Options solver;
+  ConfigureSolver(impl, options, &problem, &solver);
+  int iterations = 0;
+  if (robust) {
+    ProgressCallback callback(progress, "robust pass", options.max_iterations);
+    solver.callbacks = {&callback};
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver, &problem, &summary);
+    iterations += static_cast<int>(summary.iterations.size());
+    // Gross errors: whitened components far beyond a robust scale of them.
+    std::vector<double> magnitudes;
+    for (const AdjustmentEquation& e : impl.equations) {
+      if (e.is_prior || e.status != ObservationStatus::kUsed) continue;
+      const Eigen::VectorXd w = Whitened(impl, e);
+      for (int i = 0; i < w.size(); ++i) magnitudes.push_back(std::abs(w[i]));
+    }
+    double scale = 1.0;
+    if (!magnitudes.empty()) {
+      std::nth_element(magnitudes.begin(), magnitudes.begin() + magnitudes.size() / 2, magnitudes.end());
+      scale = std::max(1e-12, 1.4826 * magnitudes[magnitudes.size() / 2]);
+    }
+    for (AdjustmentEquation& e : impl.equations) {
+      if (e.is_prior || e.status != ObservationStatus::kUsed) continue;
+      const double worst = Whitened(impl, e).cwiseAbs().maxCoeff();
+      if (!(worst <= options.rejection_threshold * scale)) {
+        e.status = ObservationStatus::kRejected;
+        e.reason = fmt::format("robust pass: normalized residual {:.1f} > {:.1f} (robust sigma0 {:.3f})",
+                               worst / scale, options.rejection_threshold, scale);
+        problem.RemoveResidualBlock(e.id);
+        e.id = nullptr;
+        e.loss = nullptr;
+        ++result.rejected;
+      } else if (e.loss != nullptr) {
+        e.loss->Reset(nullptr, ceres::TAKE_OWNERSHIP);
+      }
+    }
+  }
+  ProgressCallback callback(progress, "weighted pass", options.max_iterations);
+  solver.callbacks = {&callback};
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  iterations += static_cast<int>(summary.iterations.size());
+  result.converged = summary.termination_type == ceres::CONVERGENCE;
+  result.iterations = iterations;
+  if (summary.termination_type == ceres::FAILURE) {
+    throw Error("adjustment", "the solver failed: " + summary.message);
+  }
+  result.solve_seconds = SecondsSince(solve_start);
+
+  const auto covariance_start = std::chrono::steady_clock::now();
+  if (progress) progress("normal equations", 0.0);
+  const ReducedNormals normals = BuildReducedNormals(impl);
+  if (progress) progress("covariance", 0.0);
+  ComputeCovarianceAndRank(impl, normals, options, &result);
+  ComputeStatistics(impl, normals, options, &result);
+  ComputePointEstimates(impl, normals, &result);
+  result.covariance_seconds = SecondsSince(covariance_start);
+  if (!result.converged) {
+    result.summary = fmt::format("The solver stopped without converging ({}): {} ", summary.message, result.summary);
+  }
+  return result;
+}
+
+}  // namespace platemeter

@@ -1,0 +1,108 @@
+// The bundle's output files (bundle_report.h): residuals.csv, the calibrated
+// camera definition, and all outputs written atomically into one folder.
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+
+#include <fmt/format.h>
+
+#include "bundle_report_internal.h"
+#include "platemeter/calib/bundle_report.h"
+#include "platemeter/core/error.h"
+#include "platemeter/grids/definition_io.h"
+#include "platemeter/measure/atomic_file.h"
+
+namespace platemeter {
+
+bool BundleReportOptions::Check(std::string* why) const {
+  auto fail = [&](const char* reason) {
+    if (why != nullptr) *why = reason;
+    return false;
+  };
+  if (balance_radius_mm && !(*balance_radius_mm > 0.0)) return fail("balance_radius_mm must be positive");
+  for (double r : profile_radii_mm) {
+    if (!(r >= 0.0) || !std::isfinite(r)) return fail("profile radii must be finite and >= 0");
+  }
+  if (worst_observations < 0) return fail("worst_observations must be >= 0");
+  return true;
+}
+
+std::vector<const ObservationResidual*> WorstObservations(const BundleResult& result, int count) {
+  std::vector<const ObservationResidual*> all;
+  for (const ObservationResidual& r : result.adjustment.residuals) {
+    if (r.normalized.size() == 2) all.push_back(&r);
+  }
+  auto size = [](const ObservationResidual* r) {
+    return (r->status == ObservationStatus::kRejected ? 1e30 : 0.0) + std::hypot(r->normalized[0], r->normalized[1]);
+  };
+  const size_t n = std::min<size_t>(all.size(), std::max(0, count));
+  std::partial_sort(all.begin(), all.begin() + n, all.end(), [&](auto* a, auto* b) { return size(a) > size(b); });
+  all.resize(n);
+  return all;
+}
+
+std::string FormatBundleResidualsCsv(const BundleResult& result) {
+  std::string out = "frame,point_id,status,x_residual_um,y_residual_um,x_normalized,y_normalized,origin,reason\n";
+  for (const ObservationResidual& r : result.adjustment.residuals) {
+    if (r.residual.size() != 2) continue;  // distances: in calibration.json's summary only
+    out += fmt::format("{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{}\n", r.group, r.item,
+                       r.status == ObservationStatus::kUsed ? "used" : "rejected", 1e3 * r.residual[0],
+                       1e3 * r.residual[1], r.normalized[0], r.normalized[1], r.origin, r.reason);
+  }
+  return out;
+}
+
+CameraDefinition CalibratedCameraDefinition(const BundleResult& result, int index, const std::string& source) {
+  const BundleCameraResult& camera = result.cameras.at(index);
+  CameraDefinition definition;
+  definition.name = camera.name;
+  definition.description = "calibrated by platemeter's self-calibrating bundle adjustment (seed 000)";
+  definition.source = source;
+  definition.format_width_mm = camera.format_width_mm > 0 ? camera.format_width_mm : 1.0;
+  definition.format_height_mm = camera.format_height_mm > 0 ? camera.format_height_mm : 1.0;
+  definition.nominal_principal_distance_mm = camera.values[0];
+  LensCalibration lens;
+  lens.model = "brown-affine";
+  lens.source = fmt::format("{}; sigma0 {:.4f} with {:.0f} degrees of freedom", source, result.adjustment.sigma0,
+                            result.adjustment.dof);
+  lens.principal_distance_mm = camera.values[0];
+  lens.principal_point_x_mm = camera.values[1];
+  lens.principal_point_y_mm = camera.values[2];
+  const char* struct_keys[3] = {"principal_distance_mm", "principal_point_x_mm", "principal_point_y_mm"};
+  for (int i = 0; i < kBundleCameraParams; ++i) {
+    const std::string key = i < 3 ? struct_keys[i] : kBundleCameraParamNames[i];
+    if (i >= 3) lens.coefficients[key] = camera.values[i];
+    if (camera.sigmas[i]) lens.sigmas[key] = *camera.sigmas[i];
+  }
+  definition.lens = lens;
+  return definition;
+}
+
+std::vector<std::string> WriteBundleOutputs(const std::string& dir, const BundleResult& result,
+                                            const BundleReportOptions& options) {
+  std::string why;
+  if (!options.Check(&why)) throw Error("bundle report options", why);
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  if (error) throw Error(dir, "cannot create the output folder: " + error.message());
+  // Every text is formatted before the first file is written: a failure leaves no partial set.
+  std::vector<std::pair<std::string, std::string>> files;
+  files.emplace_back("calibration.json", FormatCalibrationJson(result, options));
+  files.emplace_back("report.md", FormatBundleReportMarkdown(result, options));
+  files.emplace_back("residuals.csv", FormatBundleResidualsCsv(result));
+  for (size_t c = 0; c < result.cameras.size(); ++c) {
+    const CameraDefinition definition = CalibratedCameraDefinition(result, static_cast<int>(c), options.title);
+    files.emplace_back("camera-" + result.cameras[c].name + ".toml",
+                       "# " + options.title + "\n# Format: docs/definitions.md\n\n" + ToToml(definition));
+  }
+  std::vector<std::string> written;
+  for (const auto& [name, text] : files) {
+    const std::string path = (std::filesystem::path(dir) / name).string();
+    WriteFileAtomically(path, text);
+    written.push_back(path);
+  }
+  return written;
+}
+
+}  // namespace platemeter

@@ -1,0 +1,210 @@
+// platemeter calibrate simulate: the precision simulation of a planned
+// geometry (cmd_calibrate_simulate.h, docs/precision-simulation.md).
+#include "cmd_calibrate_simulate.h"
+
+#include <cmath>
+#include <iostream>
+#include <map>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "platemeter/core/error.h"
+
+namespace platemeter::cli {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double WrapDeg(double deg) {
+  double a = std::fmod(deg, 360.0);
+  if (a <= -180.0) a += 360.0;
+  if (a > 180.0) a -= 360.0;
+  return a;
+}
+
+// rotations.h R3(kappa): the image turned about the optical axis.
+Eigen::Matrix3d R3(double kappa_deg) {
+  const double k = kappa_deg * kPi / 180.0;
+  Eigen::Matrix3d r;
+  r << std::cos(k), std::sin(k), 0.0, -std::sin(k), std::cos(k), 0.0, 0.0, 0.0, 1.0;
+  return r;
+}
+
+bool InsideFormat(const sim::BundleCameraTruth& camera, const Eigen::Vector2d& p, double margin_mm) {
+  return std::abs(p.x()) <= 0.5 * camera.format_width_mm - margin_mm &&
+         std::abs(p.y()) <= 0.5 * camera.format_height_mm - margin_mm;
+}
+
+// Turns every frame to its roll in the plan's sequence and projects the
+// observations again (frame-major, points in order, as the simulator does).
+// Returns the number of passpoints dropped (fewer than two rays).
+int ApplyRolls(const PrecisionPlan& plan, const std::vector<double>& extra_deg, sim::SimulatedBlock* block) {
+  sim::BundleTruth& truth = block->truth;
+  BundleInput& input = block->input;
+  for (size_t f = 0; f < truth.stations.size(); ++f) {
+    if (extra_deg[f] == 0.0) continue;
+    sim::StationTruth& s = truth.stations[f];
+    s.image_from_object = R3(extra_deg[f]) * s.image_from_object;
+    s.angles = AnglesFromTMatrix(s.image_from_object);
+    s.roll_deg = WrapDeg(s.roll_deg + extra_deg[f]);
+    input.frames[f].angles = s.angles;
+  }
+  const double weight_mm = plan.image_sigma_um * 1e-3;
+  std::vector<std::vector<ImageObservation>> by_frame(truth.stations.size());
+  std::map<std::string, int> rays;
+  for (size_t f = 0; f < truth.stations.size(); ++f) {
+    const sim::StationTruth& s = truth.stations[f];
+    for (const sim::PointTruth& p : truth.points) {
+      Eigen::Vector2d xy;
+      if (!sim::ProjectPoint(truth.camera, s.image_from_object, s.position_m, p.position_m, &xy)) continue;
+      if (!InsideFormat(truth.camera, xy, plan.format_margin_mm)) continue;
+      ImageObservation o;
+      o.frame = s.id;
+      o.point_id = p.id;
+      o.x_mm = xy.x();
+      o.y_mm = xy.y();
+      o.sigma_x_mm = o.sigma_y_mm = weight_mm;
+      by_frame[f].push_back(std::move(o));
+      ++rays[p.id];
+    }
+  }
+  int dropped = 0;
+  std::vector<GroundPoint> kept_points;
+  for (const GroundPoint& g : input.ground_points) {
+    if (rays[g.id] >= 2) kept_points.push_back(g);
+    else ++dropped;
+  }
+  input.ground_points = std::move(kept_points);
+  input.observations.clear();
+  truth.observations.clear();
+  for (const auto& frame : by_frame) {
+    for (const ImageObservation& o : frame) {
+      if (rays[o.point_id] < 2) continue;
+      input.observations.push_back(o);
+      truth.observations.push_back(o);
+    }
+  }
+  return dropped;
+}
+
+struct SimulateArgs {
+  std::string plan;
+  std::string output_dir;
+  std::string format = "text";
+};
+
+void RunSimulate(const SimulateArgs& args) {
+  if (args.format != "text" && args.format != "json") {
+    throw Error("--format", "must be text or json (is '" + args.format + "')");
+  }
+  const PrecisionPlan plan = ReadPrecisionPlan(args.plan);
+  const PrecisionSimulationResult result = RunPrecisionSimulation(plan);
+  std::cout << (args.format == "json" ? FormatPrecisionJson(result) : FormatPrecisionText(result));
+  if (!args.output_dir.empty()) {
+    for (const std::string& path : WritePrecisionOutputs(args.output_dir, result)) std::cerr << "wrote " << path << '\n';
+  }
+}
+
+}  // namespace
+
+sim::LunarBlockOptions LunarBlockOptionsFromPlan(const PrecisionPlan& plan) {
+  sim::LunarBlockOptions o;
+  o.camera.c_mm = plan.focal_length_mm;
+  o.camera.xp_mm = plan.xp_mm;
+  o.camera.yp_mm = plan.yp_mm;
+  o.camera.k1_per_mm2 = plan.k1_per_mm2;
+  o.camera.k2_per_mm4 = plan.k2_per_mm4;
+  o.camera.k3_per_mm6 = plan.k3_per_mm6;
+  o.camera.p1_per_mm = plan.p1_per_mm;
+  o.camera.p2_per_mm = plan.p2_per_mm;
+  o.camera.b1 = 0.0;
+  o.camera.b2 = 0.0;
+  o.camera.format_width_mm = plan.format_width_mm;
+  o.camera.format_height_mm = plan.format_height_mm;
+  o.moon_radius_m = plan.body_radius_km * 1e3;
+  o.altitude_m = plan.altitude_km * 1e3;
+  o.revolutions = plan.revolutions;
+  if (o.revolutions.empty()) {
+    o.revolutions.clear();
+    for (int k = 1; k <= plan.orbits; ++k) o.revolutions.push_back(k);
+  }
+  o.track_spacing_m = plan.track_spacing_km * 1e3;
+  o.exposures_per_orbit = plan.exposures_per_orbit;
+  o.convergence_deg = plan.convergence_deg;
+  o.kappa_start_deg = plan.kappa_start_deg;
+  o.kappa_increment_deg = plan.kappa_increment_deg;
+  o.passpoints = plan.passpoints;
+  o.min_frames_per_point = plan.min_frames_per_point;
+  o.relief_m = plan.relief_m;
+  o.format_margin_mm = plan.format_margin_mm;
+  o.sigma_um = 0.0;
+  o.weight_sigma_um = plan.image_sigma_um;
+  o.approximations = sim::ApproximationOptions{};  // start at the truth
+  o.seed = plan.seed;
+  return o;
+}
+
+PrecisionBlock SimulatePrecisionBlock(const PrecisionPlan& plan) {
+  std::string why;
+  if (!plan.Check(&why)) throw Error(plan.source.empty() ? "precision plan" : plan.source, why);
+  sim::SimulatedBlock block = sim::SimulateLunarBlock(LunarBlockOptionsFromPlan(plan));
+  const int n = plan.exposures_per_orbit;
+  std::vector<double> extra(block.truth.stations.size(), 0.0);
+  bool any = false;
+  if (plan.kappa_sequence == KappaSequence::kContinuous) {
+    for (size_t f = 0; f < extra.size(); ++f) {
+      extra[f] = WrapDeg(block.truth.stations[f].group * n * plan.kappa_increment_deg);
+      any = any || extra[f] != 0.0;
+    }
+  }
+  const int dropped = any ? ApplyRolls(plan, extra, &block) : 0;
+
+  PrecisionBlock out;
+  out.input = std::move(block.input);
+  for (const sim::StationTruth& s : block.truth.stations) {
+    out.frame_orbit.push_back(s.group);
+    out.frame_velocity.push_back(s.velocity_direction);
+    out.frame_roll_deg.push_back(s.roll_deg);
+  }
+  out.summary = block.summary;
+  // The simulator states the noise it added (none): say what the weights are.
+  const size_t noise = out.summary.find(", sigma 0.0 um");
+  if (noise != std::string::npos) {
+    out.summary.replace(noise, 14, fmt::format(", noise-free, weighted by {:g} um", plan.image_sigma_um));
+  }
+  if (plan.kappa_sequence == KappaSequence::kContinuous) {
+    out.summary += fmt::format("; rolls continue from orbit to orbit ({:+g} deg per exposure over all {} exposures)",
+                               plan.kappa_increment_deg, extra.size());
+  } else {
+    out.summary += "; rolls start again on every orbit";
+  }
+  if (any) {
+    out.summary += fmt::format("; {} observations after the rolls", out.input.observations.size());
+    if (dropped > 0) out.summary += fmt::format(", {} passpoints left the formats", dropped);
+  }
+  return out;
+}
+
+PrecisionSimulationResult RunPrecisionSimulation(const PrecisionPlan& plan) {
+  return EvaluatePrecision(plan, SimulatePrecisionBlock(plan));
+}
+
+void RegisterCalibrateSimulate(CLI::App* calibrate, GlobalOptions& global) {
+  (void)global;
+  auto args = std::make_shared<SimulateArgs>();
+  auto* cmd = calibrate->add_subcommand(
+      "simulate",
+      "precision simulation (seed 000 section 4): the a-priori sigmas of a planned geometry, without images "
+      "(docs/precision-simulation.md)");
+  cmd->add_option("PLAN", args->plan, "the plan (TOML), e.g. samples/plans/seed000-table9-80mm.toml")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("-o,--output", args->output_dir, "also write precision.json and precision.txt into this folder");
+  cmd->add_option("--format", args->format, "what to print: text or json")
+      ->check(CLI::IsMember({"text", "json"}))
+      ->capture_default_str();
+  cmd->callback([args] { RunSimulate(*args); });
+}
+
+}  // namespace platemeter::cli

@@ -6,6 +6,7 @@
 #include <memory>
 #include <sstream>
 
+#include "cmd_calibrate_simulate.h"
 #include "commands.h"
 #include "platemeter/calib/bundle_adjustment.h"
 #include "platemeter/calib/bundle_input_io.h"
@@ -102,6 +103,8 @@ void RunBundle(const BundleCommandOptions& o, const GlobalOptions& global) {
   report.title = job.output.title.empty() ? "Self-calibrating bundle adjustment: " + job.source : job.output.title;
   report.balance_radius_mm = job.output.balance_radius_mm;
   report.warnings = warnings;
+  report.export_pixel_size_um = job.output.export_pixel_size_um;
+  report.export_image_size_px = job.output.export_image_size_px;
   const std::vector<std::string> written = WriteBundleOutputs(o.output_dir, result, report);
   std::cout << result.adjustment.summary << '\n';
   for (const BundleCameraResult& camera : result.cameras) {
@@ -141,6 +144,7 @@ void RegisterCalibrateCommand(CLI::App& app, GlobalOptions& global) {
       ->check(CLI::PositiveNumber);
   bundle->add_flag("--quiet", o->quiet, "no progress on stderr");
   bundle->callback([o, &global] { RunBundle(*o, global); });
+  RegisterCalibrateSimulate(calibrate, global);
 }
 
 }  // namespace platemeter::cli

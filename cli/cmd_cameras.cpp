@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 
+#include "cmd_cameras_export.h"
 #include "commands.h"
 #include "platemeter/calib/distortion_profile.h"
 #include "platemeter/calib/model_conversion.h"
@@ -226,6 +227,7 @@ void RegisterCamerasCommand(CLI::App& app, GlobalOptions& global) {
                       "k1_per_mm2,k2_per_mm4=-0.96");
   profile->add_option("--format", args->format, "text (default) or csv")->check(CLI::IsMember({"text", "csv"}));
   profile->callback([&global, args] { RunProfile(global, *args); });
+  RegisterCamerasExport(cameras, global);
 }
 
 }  // namespace platemeter::cli

@@ -149,7 +149,7 @@ void ComputeCovarianceAndRank(const AdjustmentProblem::Impl& impl, const Reduced
     qr.setThreshold(1e-9);
     gauge_basis = Eigen::MatrixXd(qr.householderQ()).leftCols(qr.rank());
   }
-  if (impl.gauge_is_datum) {
+  if (impl.gauge_is_datum && V0.cols() > 0) {
     const Eigen::MatrixXd outside = V0 - gauge_basis * (gauge_basis.transpose() * V0);
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(outside, Eigen::ComputeThinU);
     int count = 0;
@@ -157,6 +157,9 @@ void ComputeCovarianceAndRank(const AdjustmentProblem::Impl& impl, const Reduced
     defects = svd.matrixU().leftCols(count);
     rank.datum_defect = static_cast<int>(V0.cols()) - count;
   }
+  // The minimum-trace S-transformation holds only where the whole gauge is
+  // free; priors that fix part of it (a-priori stations) leave the datum to them.
+  const bool apply_inner_constraints = impl.gauge_is_datum && rank.datum_defect == gauge_basis.cols();
   for (int k = 0; k < defects.cols(); ++k) {
     NullDirection d = Describe(defects.col(k), words);
     d.exact = true;
@@ -184,7 +187,7 @@ void ComputeCovarianceAndRank(const AdjustmentProblem::Impl& impl, const Reduced
   }
   Eigen::MatrixXd Q = inv_sqrt_d.asDiagonal() * (V * inverse_lambda.asDiagonal() * V.transpose()) *
                       inv_sqrt_d.asDiagonal();
-  if (impl.gauge_is_datum) {
+  if (apply_inner_constraints) {
     // S-transformation to minimum trace over the flagged rows: P = I - G (G^T W G)^-1 G^T W.
     Eigen::MatrixXd Gp(n, impl.gauge.cols());
     Eigen::VectorXd w(n);

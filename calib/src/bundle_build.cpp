@@ -91,7 +91,12 @@ void SetSimilarityGauge(const BuiltBundle& built, bool is_datum, AdjustmentProbl
 
 DatumKind ResolveDatum(const BundleInput& input, DatumKind requested) {
   if (requested != DatumKind::kAuto) return requested;
-  if (std::any_of(input.ground_points.begin(), input.ground_points.end(), HasPrior)) return DatumKind::kControlPoints;
+  // A-priori coordinates of points or stations (seed 000 section 3.3's tracking) fix the datum.
+  if (std::any_of(input.ground_points.begin(), input.ground_points.end(), HasPrior) ||
+      std::any_of(input.frames.begin(), input.frames.end(),
+                  [](const FrameSetup& f) { return f.position_covariance_m2.has_value(); })) {
+    return DatumKind::kControlPoints;
+  }
   if (std::any_of(input.frames.begin(), input.frames.end(), [](const FrameSetup& f) { return f.fixed; })) {
     return DatumKind::kFixedFrames;
   }
@@ -180,7 +185,13 @@ BuiltBundle BuildBundleProblem(const BundleInput& input, const BundleApproximati
   SetSimilarityGauge(built, free_network, problem);
   int control = static_cast<int>(std::count(built.point_control.begin(), built.point_control.end(), true));
   switch (built.datum) {
-    case DatumKind::kControlPoints: built.datum_words = fmt::format("control: {} points with a-priori coordinates", control); break;
+    case DatumKind::kControlPoints: {
+      const auto stations = std::count_if(input.frames.begin(), input.frames.end(),
+                                          [](const FrameSetup& f) { return f.position_covariance_m2.has_value(); });
+      built.datum_words =
+          fmt::format("control: {} points and {} stations with a-priori coordinates", control, stations);
+      break;
+    }
     case DatumKind::kFixedFrames:
       built.datum_words = fmt::format("frame{} {} held fixed{}", fixed_names.size() == 1 ? "" : "s",
                                       fmt::join(fixed_names, ", "),

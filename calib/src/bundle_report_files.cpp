@@ -9,6 +9,7 @@
 
 #include "bundle_report_internal.h"
 #include "platemeter/calib/bundle_report.h"
+#include "platemeter/calib/camera_export.h"
 #include "platemeter/core/error.h"
 #include "platemeter/grids/definition_io.h"
 #include "platemeter/measure/atomic_file.h"
@@ -79,6 +80,25 @@ CameraDefinition CalibratedCameraDefinition(const BundleResult& result, int inde
   return definition;
 }
 
+namespace {
+
+// The calibrated camera for other tools, one file per format.
+void AppendExports(const CameraDefinition& camera, const BundleReportOptions& options,
+                   std::vector<std::pair<std::string, std::string>>* files) {
+  CameraExportOptions export_options;
+  export_options.pixel_size_um = *options.export_pixel_size_um;
+  export_options.image_width_px = (*options.export_image_size_px)[0];
+  export_options.image_height_px = (*options.export_image_size_px)[1];
+  const std::pair<CameraExportFormat, const char*> formats[] = {
+      {CameraExportFormat::kOpenCv, "-opencv.yaml"}, {CameraExportFormat::kMicMac, "-micmac.xml"},
+      {CameraExportFormat::kAspTsai, ".tsai"}};
+  for (const auto& [format, suffix] : formats) {
+    files->emplace_back("camera-" + camera.name + suffix, ExportCamera(camera, format, export_options));
+  }
+}
+
+}  // namespace
+
 std::vector<std::string> WriteBundleOutputs(const std::string& dir, const BundleResult& result,
                                             const BundleReportOptions& options) {
   std::string why;
@@ -95,6 +115,11 @@ std::vector<std::string> WriteBundleOutputs(const std::string& dir, const Bundle
     const CameraDefinition definition = CalibratedCameraDefinition(result, static_cast<int>(c), options.title);
     files.emplace_back("camera-" + result.cameras[c].name + ".toml",
                        "# " + options.title + "\n# Format: docs/definitions.md\n\n" + ToToml(definition));
+  }
+  if (options.export_pixel_size_um && options.export_image_size_px) {
+    for (size_t c = 0; c < result.cameras.size(); ++c) {
+      AppendExports(CalibratedCameraDefinition(result, static_cast<int>(c), options.title), options, &files);
+    }
   }
   std::vector<std::string> written;
   for (const auto& [name, text] : files) {

@@ -128,6 +128,11 @@ std::string FormatCalibrationJson(const BundleResult& result, const BundleReport
     const double v[6] = {f.position_m.x(), f.position_m.y(), f.position_m.z(), f.angles.phi_rad, f.angles.omega_rad,
                          f.angles.kappa_rad};
     for (int i = 0; i < 6; ++i) e[kBundleFrameParamNames[i]] = {{"value", v[i]}, {"sigma", Optional(f.sigmas[i])}};
+    std::vector<int> indices;
+    for (const char* name : kBundleFrameParamNames) indices.push_back(a.Find("frame " + f.id, name));
+    const Eigen::MatrixXd cov = a.Covariance(indices, true);
+    e["covariance_scaled_by_sigma0_squared"] = ordered_json::array();
+    for (int r = 0; r < 6; ++r) e["covariance_scaled_by_sigma0_squared"].push_back(std::vector<double>(cov.row(r).begin(), cov.row(r).end()));
     e["observations"] = f.observations;
     e["rms_x_um"] = f.rms_x_um;
     e["rms_y_um"] = f.rms_y_um;

@@ -143,11 +143,10 @@ PrecisionSimulationResult EvaluatePrecision(const PrecisionPlan& plan, const Pre
   for (int i = 3; i < kBundleCameraParams; ++i) lens_indices.push_back(cam.parameter_index[i]);
   // Values: the truth (the adjustment stays there up to rounding, and a
   // decentering of 1e-19 instead of 0 would pick an arbitrary direction for P).
-  const std::array<double, kBundleCameraParams>& truth = block.input.cameras[0].values;
   LensEstimate lens;
   lens.model = DistortionModelId::kBrownAffine;
-  lens.principal_distance_mm = truth[0];
-  for (int i = 3; i < kBundleCameraParams; ++i) lens.params.push_back(truth[i]);
+  lens.principal_distance_mm = truth_values[0];
+  for (int i = 3; i < kBundleCameraParams; ++i) lens.params.push_back(truth_values[i]);
   lens.covariance = a.Covariance(lens_indices, /*scaled=*/false);
   lens.covariance = 0.5 * (lens.covariance + lens.covariance.transpose());
 

@@ -7,8 +7,8 @@ namespace platemeter {
 
 // How the datum (the object frame's origin, orientation and scale) is fixed.
 enum class DatumKind {
-  kAuto,              // control points if any point has a prior, else fixed frames if any, else inner constraints
-  kControlPoints,     // by ground points with a-priori coordinates (GroundPoint sigmas)
+  kAuto,              // control if any point or station has a prior, else fixed frames if any, else inner constraints
+  kControlPoints,     // by ground points (GroundPoint sigmas) and stations (position covariance) with a-priori coordinates
   kFixedFrames,       // by frames held fixed (FrameSetup::fixed) plus distances (scale) where given
   kInnerConstraints,  // free network: minimum trace over the exposure stations (positions and attitudes)
 };

@@ -11,7 +11,11 @@
 //                      statistics, correlations, tests and rank report;
 //   residuals.csv      one row per observation;
 //   camera-NAME.toml   the calibrated camera as a definition (lens model
-//                      brown-affine, sigmas) that --definitions loads.
+//                      brown-affine, sigmas) that --definitions loads;
+//   camera-NAME-opencv.yaml, -micmac.xml, .tsai: the exports, where a pixel
+//                      grid is given (fitted where the models differ, the
+//                      fit's residual in the file and in calibration.json).
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -31,6 +35,10 @@ struct BundleReportOptions {
   int worst_observations = 20;           // listed in the JSON and the report
   std::vector<BundleWarning> warnings;   // what the checks left out
   std::string software = "platemeter";
+  // With both: every camera also exported for OpenCV, MicMac and ASP
+  // (camera_export.h) for scans of this pixel size and image size.
+  std::optional<double> export_pixel_size_um;              // um
+  std::optional<std::array<int, 2>> export_image_size_px;  // px; width, height
   bool Check(std::string* why) const;
 };
 

@@ -70,6 +70,7 @@ struct Args {
   bool covariance = true;
   bool colmap = true;
   bool small = false;
+  bool table9 = false;
   std::string work = "/tmp/bench_bundle";
   std::string child;   // internal: run one method in this process
   std::string result;  // internal: where the child writes its key = value lines
@@ -288,6 +289,91 @@ Result RunBareCeres(const BundleInput& input, const Args& args, std::string* not
     }
   }
   return result;
+}
+
+// ---------------------------------------------------------------------------
+// --table9: the geometry check of the lunar blocks against seed 000's Tables 9
+// and 10. The posterior sigmas of xp, yp and c of a pure self-calibration (no
+// priors; inner cone c, xp, yp, k1..k3, p1, p2 free), i.e. ceres::Covariance
+// at the true values with the a-priori image sigma (a precision simulation, as
+// the seed's), datum: the middle orbit's centre frame fixed and the along-track
+// coordinate of that orbit's first frame (scale). Printed next to the seed's.
+void RunTable9(const Args& args) {
+  struct Case {
+    std::string name;
+    sim::LunarBlockOptions options;
+    double seed_xp_um, seed_yp_um, seed_c_um;
+  };
+  const std::vector<Case> cases = {
+      {"Table 9, 50 mm", sim::Seed000Table9Options(50.0), 9, 6, 14},
+      {"Table 9, 80 mm", sim::Seed000Table9Options(80.0), 21, 14, 26},
+      {"Table 9, 150 mm", sim::Seed000Table9Options(150.0), 70, 44, 70},
+      {"Table 9, 500 mm", sim::Seed000Table9Options(500.0), 740, 460, 701},
+      {"Table 10, 76.2 mm terrain", sim::Seed000Table10Options(), 2, 2, 3},
+      {"Apollo 14 (section 3), 500 mm", sim::Apollo14Section3Options(), 0, 0, 0},
+  };
+  std::printf("seed 000 Tables 9 and 10: posterior sigmas (um) of a pure self-calibration of the simulated blocks\n");
+  std::printf("%-32s %9s %9s %9s   %9s %9s %9s   %s\n", "case", "xp", "yp", "c", "seed xp", "seed yp", "seed c'",
+              "observations");
+  for (Case k : cases) {
+    if (getenv("T9_MINF")) k.options.min_frames_per_point = atoi(getenv("T9_MINF"));
+    if (getenv("T9_SPACING")) k.options.track_spacing_m = atof(getenv("T9_SPACING"));
+    if (getenv("T9_RELIEF")) k.options.relief_m = atof(getenv("T9_RELIEF"));
+    const sim::SimulatedBlock block = sim::SimulateLunarBlock(k.options);
+    const BundleInput& input = block.input;
+    const auto scale = CameraScale(0.5 * std::hypot(k.options.camera.format_width_mm, k.options.camera.format_height_mm));
+    std::array<double, kBundleCameraParams> camera = block.truth.camera.Values();
+    for (int i = 0; i < kBundleCameraParams; ++i) camera[i] *= scale[i];
+    std::vector<std::array<double, 6>> poses;
+    std::map<std::string, int> frame_index;
+    for (const sim::StationTruth& st : block.truth.stations) {
+      frame_index[st.id] = static_cast<int>(poses.size());
+      poses.push_back({st.angles.phi_rad, st.angles.omega_rad, st.angles.kappa_rad, st.position_m.x(),
+                       st.position_m.y(), st.position_m.z()});
+    }
+    std::vector<std::array<double, 3>> points;
+    std::map<std::string, int> point_index;
+    for (const sim::PointTruth& p : block.truth.points) {
+      point_index[p.id] = static_cast<int>(points.size());
+      points.push_back({p.position_m.x(), p.position_m.y(), p.position_m.z()});
+    }
+    ceres::Problem problem;
+    for (const ImageObservation& o : block.truth.observations) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CollinearityCost, 2, kBundleCameraParams, 6, 3>(
+                                   new CollinearityCost{o.x_mm, o.y_mm, o.sigma_x_mm, o.sigma_y_mm, scale}),
+                               nullptr, camera.data(), poses[frame_index.at(o.frame)].data(),
+                               points[point_index.at(o.point_id)].data());
+    }
+    if (getenv("T9_FIXK23")) problem.SetManifold(camera.data(), new ceres::SubsetManifold(kBundleCameraParams, {4, 5, 8, 9}));
+    else if (getenv("T9_FIXK3")) problem.SetManifold(camera.data(), new ceres::SubsetManifold(kBundleCameraParams, {5, 8, 9}));
+    else problem.SetManifold(camera.data(), new ceres::SubsetManifold(kBundleCameraParams, {8, 9}));
+    const int centre = static_cast<int>(poses.size()) / 2;  // the middle orbit's centre frame
+    problem.SetParameterBlockConstant(poses[centre].data());
+    problem.SetManifold(poses[centre - 1].data(), new ceres::SubsetManifold(6, {3}));
+    ceres::Covariance::Options cov_options;
+    cov_options.algorithm_type = getenv("T9_QR") ? ceres::SPARSE_QR : ceres::DENSE_SVD;
+    cov_options.null_space_rank = getenv("T9_RANK") ? atoi(getenv("T9_RANK")) : -1;
+    cov_options.min_reciprocal_condition_number = getenv("T9_RCN") ? atof(getenv("T9_RCN")) : 1e-16;
+    cov_options.num_threads = args.threads;
+    ceres::Covariance covariance(cov_options);
+    std::vector<std::pair<const double*, const double*>> blocks = {{camera.data(), camera.data()}};
+    double sx = NAN, sy = NAN, sc = NAN;
+    if (covariance.Compute(blocks, &problem)) {
+      double c[kBundleCameraParams * kBundleCameraParams];
+      covariance.GetCovarianceBlock(camera.data(), camera.data(), c);
+      sc = std::sqrt(c[0]) / scale[0] * 1e3;
+      sx = std::sqrt(c[kBundleCameraParams + 1]) / scale[1] * 1e3;
+      sy = std::sqrt(c[2 * kBundleCameraParams + 2]) / scale[2] * 1e3;
+    }
+    (void)input;
+    if (k.seed_xp_um > 0) {
+      std::printf("%-32s %9.1f %9.1f %9.1f   %9.0f %9.0f %9.0f   %zu\n", k.name.c_str(), sx, sy, sc, k.seed_xp_um,
+                  k.seed_yp_um, k.seed_c_um, block.truth.observations.size());
+    } else {
+      std::printf("%-32s %9.1f %9.1f %9.1f   %9s %9s %9s   %zu (xp, yp not recoverable, section 2.3)\n",
+                  k.name.c_str(), sx, sy, sc, "-", "-", "-", block.truth.observations.size());
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------
@@ -574,17 +660,23 @@ int main(int argc, char** argv) {
     else if (a == "--no-covariance") args.covariance = false;
     else if (a == "--no-colmap") args.colmap = false;
     else if (a == "--small") args.small = true;
+    else if (a == "--table9") args.table9 = true;
     else if (a == "--work") args.work = next();
     else if (a == "--child") args.child = next();
     else if (a == "--result") args.result = next();
     else {
       std::fprintf(stderr,
                    "usage: bench_bundle [--pixel-um 10] [--solver sparse|dense] [--threads 2] [--no-covariance]\n"
-                   "                    [--no-colmap] [--small] [--work DIR]\n");
+                   "                    [--no-colmap] [--small] [--work DIR]\n"
+                   "       bench_bundle --table9\n");
       return 2;
     }
   }
   if (!args.child.empty()) return RunChild(args);
+  if (args.table9) {
+    RunTable9(args);
+    return 0;
+  }
 
   const fs::path work = args.work;
   fs::create_directories(work);
@@ -769,7 +861,7 @@ int main(int argc, char** argv) {
   std::printf("\ninner cone, truth vs fitted (COLMAP's distortion converted to Brown's correction form, first order):\n");
   std::printf("%-12s %14s", "parameter", "truth");
   for (const Row& r : rows) {
-    if (r.has_camera) std::printf(" %22s", r.method.substr(0, 22).c_str());
+    if (r.has_camera) std::printf(" %22s", r.label.c_str());
   }
   std::printf("\n");
   const auto ceres_sigma = ceres_result.count("camera_sigma") ? ceres_result.at("camera_sigma") : std::vector<double>{};

@@ -141,7 +141,8 @@ bool AdjustmentOptions::Check(std::string* why) const {
     return false;
   };
   if (!(robust_loss_scale >= 0.0)) return fail("robust_loss_scale must be 0 (none) or positive");
-  if (!(rejection_threshold > 0.0)) return fail("rejection_threshold must be positive");
+  if (!(rejection_threshold >= 0.0)) return fail("rejection_threshold must be 0 (from false_rejection_rate) or positive");
+  if (!(false_rejection_rate > 0.0 && false_rejection_rate < 0.5)) return fail("false_rejection_rate must be in (0, 0.5)");
   if (max_iterations < 1) return fail("max_iterations must be at least 1");
   if (!(function_tolerance > 0.0)) return fail("function_tolerance must be positive");
   if (!(correlation_threshold > 0.0 && correlation_threshold <= 1.0)) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <thread>
 
+#include <boost/math/distributions/normal.hpp>
 #include <fmt/format.h>
 
 #include "adjustment_internal.h"
@@ -73,6 +74,14 @@ void ConfigureSolver(const AdjustmentProblem::Impl& impl, const AdjustmentOption
   (void)problem;
 }
 
+// The rejection level: given, or where a Gaussian residual component is
+// exceeded with probability false_rejection_rate over all `components` (Bonferroni).
+double RejectionThreshold(const AdjustmentOptions& options, size_t components) {
+  if (options.rejection_threshold > 0.0) return options.rejection_threshold;
+  const double per_component = options.false_rejection_rate / std::max<size_t>(1, components);
+  return boost::math::quantile(boost::math::complement(boost::math::normal(), per_component / 2));
+}
+
 }  // namespace
 
 AdjustmentResult AdjustmentProblem::Solve(const AdjustmentOptions& options, const AdjustmentProgress& progress) {
@@ -136,13 +145,14 @@ AdjustmentResult AdjustmentProblem::Solve(const AdjustmentOptions& options, cons
       std::nth_element(magnitudes.begin(), magnitudes.begin() + magnitudes.size() / 2, magnitudes.end());
       scale = std::max(1e-12, 1.4826 * magnitudes[magnitudes.size() / 2]);
     }
+    const double threshold = RejectionThreshold(options, magnitudes.size());
     for (AdjustmentEquation& e : impl.equations) {
       if (e.is_prior || e.status != ObservationStatus::kUsed) continue;
       const double worst = Whitened(impl, e).cwiseAbs().maxCoeff();
-      if (!(worst <= options.rejection_threshold * scale)) {
+      if (!(worst <= threshold * scale)) {
         e.status = ObservationStatus::kRejected;
         e.reason = fmt::format("robust pass: normalized residual {:.1f} > {:.1f} (robust sigma0 {:.3f})",
-                               worst / scale, options.rejection_threshold, scale);
+                               worst / scale, threshold, scale);
         problem.RemoveResidualBlock(e.id);
         e.id = nullptr;
         e.loss = nullptr;

@@ -19,6 +19,7 @@ AdjustmentOptions EngineOptions(const BundleOptions& options) {
   AdjustmentOptions engine;
   engine.robust_loss_scale = options.robust_loss_scale;
   engine.rejection_threshold = options.rejection_threshold;
+  engine.false_rejection_rate = options.false_rejection_rate;
   engine.max_iterations = options.max_iterations;
   engine.function_tolerance = options.function_tolerance;
   engine.correlation_threshold = options.correlation_threshold;

@@ -393,7 +393,7 @@ DistanceObservation ReadDistance(const JobReader& r, const toml::table& t) {
 
 void ReadAdjustment(const JobReader& r, const toml::table& t, BundleOptions* o) {
   r.CheckKeys(t, "adjustment.",
-              {"datum", "robust_loss_scale", "rejection_threshold", "max_iterations", "function_tolerance",
+              {"datum", "robust_loss_scale", "rejection_threshold", "false_rejection_rate", "max_iterations", "function_tolerance",
                "correlation_threshold", "significance_level", "rank_tolerance", "num_threads"});
   if (const toml::node* n = t.get("datum")) {
     const std::string name = r.String(*n, "adjustment.datum");
@@ -402,7 +402,10 @@ void ReadAdjustment(const JobReader& r, const toml::table& t, BundleOptions* o) 
     }
   }
   if (const toml::node* n = t.get("robust_loss_scale")) o->robust_loss_scale = r.Number(*n, "adjustment.robust_loss_scale", 0.0, 1e6);
-  if (const toml::node* n = t.get("rejection_threshold")) o->rejection_threshold = r.Number(*n, "adjustment.rejection_threshold", 0.0, 1e6, false);
+  if (const toml::node* n = t.get("rejection_threshold")) o->rejection_threshold = r.Number(*n, "adjustment.rejection_threshold", 0.0, 1e6);
+  if (const toml::node* n = t.get("false_rejection_rate")) {
+    o->false_rejection_rate = r.Number(*n, "adjustment.false_rejection_rate", 0.0, 0.5, false);
+  }
   if (const toml::node* n = t.get("max_iterations")) o->max_iterations = static_cast<int>(r.Integer(*n, "adjustment.max_iterations", 1, 1000000));
   if (const toml::node* n = t.get("function_tolerance")) o->function_tolerance = r.Number(*n, "adjustment.function_tolerance", 0.0, 0.1, false);
   if (const toml::node* n = t.get("correlation_threshold")) o->correlation_threshold = r.Number(*n, "adjustment.correlation_threshold", 0.0, 1.0, false);

@@ -47,8 +47,11 @@ bool BundleOptions::Check(std::string* why) const {
   if (!(robust_loss_scale >= 0.0) || !std::isfinite(robust_loss_scale)) {
     return fail("robust_loss_scale must be 0 (no robust pass) or a positive number of sigmas");
   }
-  if (!(rejection_threshold > 0.0) || !std::isfinite(rejection_threshold)) {
-    return fail("rejection_threshold must be a positive number of sigmas");
+  if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold)) {
+    return fail("rejection_threshold must be 0 (from false_rejection_rate) or a positive number of sigmas");
+  }
+  if (!(false_rejection_rate > 0.0 && false_rejection_rate < 0.5)) {
+    return fail("false_rejection_rate must lie in (0, 0.5)");
   }
   if (max_iterations < 1) return fail("max_iterations must be at least 1");
   if (!(function_tolerance > 0.0) || !(function_tolerance < 1.0)) {

@@ -34,11 +34,12 @@ std::vector<const ObservationResidual*> WorstObservations(const BundleResult& re
   for (const ObservationResidual& r : result.adjustment.residuals) {
     if (r.normalized.size() == 2) all.push_back(&r);
   }
-  auto size = [](const ObservationResidual* r) {
-    return (r->status == ObservationStatus::kRejected ? 1e30 : 0.0) + std::hypot(r->normalized[0], r->normalized[1]);
+  // Rejected ones first, then by the length of the normalized residual.
+  auto key = [](const ObservationResidual* r) {
+    return std::make_pair(r->status == ObservationStatus::kRejected, std::hypot(r->normalized[0], r->normalized[1]));
   };
   const size_t n = std::min<size_t>(all.size(), std::max(0, count));
-  std::partial_sort(all.begin(), all.begin() + n, all.end(), [&](auto* a, auto* b) { return size(a) > size(b); });
+  std::partial_sort(all.begin(), all.begin() + n, all.end(), [&](auto* a, auto* b) { return key(a) > key(b); });
   all.resize(n);
   return all;
 }

@@ -590,7 +590,8 @@ TEST(BundleOptions, DatumNamesAndChecks) {
     EXPECT_NE(reason.find(expected), std::string::npos) << reason;
   };
   fails([](BundleOptions& o) { o.robust_loss_scale = -1; }, "robust_loss_scale");
-  fails([](BundleOptions& o) { o.rejection_threshold = 0; }, "rejection_threshold");
+  fails([](BundleOptions& o) { o.rejection_threshold = -1; }, "rejection_threshold");
+  fails([](BundleOptions& o) { o.false_rejection_rate = 0; }, "false_rejection_rate");
   fails([](BundleOptions& o) { o.max_iterations = 0; }, "max_iterations");
   fails([](BundleOptions& o) { o.function_tolerance = 0; }, "function_tolerance");
   fails([](BundleOptions& o) { o.correlation_threshold = 1.5; }, "correlation_threshold");

@@ -48,7 +48,7 @@ constexpr std::array<const char*, 7> kPhiNames = {"f_px", "cx_px", "cy_px", "k1"
 // The block: the simulator's default planar target (a 16 mm lens on 18 x 12 mm,
 // 3000 x 2000 pixels of 6 um, k1 and k2 giving ~48 um of radial correction at
 // the 10.8 mm half diagonal, p1 = 2e-5 and p2 = -1.5e-5 /mm giving ~3 um of
-// decentering there; 12 x 9 points, 15 poses tilted 10..45 deg, rolled +-90
+// decentering (profile) there; 12 x 9 points, 15 poses tilted 10..45 deg, rolled +-90
 // deg; 0.6 um = 0.1 px of noise per axis), both tools starting from the true
 // c, xp, yp and zero distortion. The simulator's default seed (1).
 sim::PlanarTargetOptions TargetOptions() {
@@ -56,6 +56,7 @@ sim::PlanarTargetOptions TargetOptions() {
   options.approximations.zero_distortion = true;
   // Other blocks (docs/bundle-vs-opencv.md lists seeds 1..8).
   if (const char* seed = std::getenv("BUNDLE_VS_OPENCV_SEED")) options.seed = std::stoull(seed);
+  if (const char* n = std::getenv("BVO_TMP_NOISE")) options.sigma_um = std::stod(n);
   return options;
 }
 
@@ -70,8 +71,7 @@ struct PlatemeterFit {
   double sum_squares_px2 = 0.0;  // sum of squared residuals, in pixels^2 (ideal-plane residuals / pixel)
   bool converged = false;
   std::string summary;
-  std::vector<BundleFrameResult> frames;
-  std::vector<BundlePointResult> points;
+  std::vector<BundleFrameResult> frames;  // the exterior orientations, for the recomputed Jacobian
 };
 
 // c, xp, yp, k1, k2, p1, p2 free; k3, b1, b2 fixed at 0; every frame free;
@@ -91,6 +91,7 @@ PlatemeterFit RunPlatemeter(const sim::PlanarTargetBlock& target, bool noise_fre
   BundleOptions options;
   options.datum = DatumKind::kControlPoints;
   const BundleResult result = RunBundleAdjustment(input, options);
+  EXPECT_EQ(result.datum, DatumKind::kControlPoints);
 
   PlatemeterFit fit;
   fit.converged = result.adjustment.converged;
@@ -105,7 +106,6 @@ PlatemeterFit RunPlatemeter(const sim::PlanarTargetBlock& target, bool noise_fre
   }
   fit.covariance = result.adjustment.Covariance(indices, /*scaled=*/true);
   fit.frames = result.frames;
-  fit.points = result.points;
   const double pixel_mm = target.pixels.pixel_size_um * 1e-3;
   for (const ObservationResidual& r : result.adjustment.residuals) {
     for (double v : r.residual) fit.sum_squares_px2 += (v / pixel_mm) * (v / pixel_mm);
@@ -160,10 +160,10 @@ Eigen::Vector2d OpenCvPixel(const Vec7& phi, const Eigen::Vector2d& direction, d
 Eigen::Vector2d OpenCvUndistort(const Vec7& phi, const Eigen::Vector2d& distorted, double k3 = 0.0) {
   Eigen::Vector2d n = distorted;
   for (int iteration = 0; iteration < 50; ++iteration) {
-    const double h = 1e-7;
+    const Eigen::Vector2d hx(1e-7, 0.0), hy(0.0, 1e-7);
     Eigen::Matrix2d jacobian;
-    jacobian.col(0) = (OpenCvDistort(phi, n + Eigen::Vector2d(h, 0), k3) - OpenCvDistort(phi, n - Eigen::Vector2d(h, 0), k3)) / (2 * h);
-    jacobian.col(1) = (OpenCvDistort(phi, n + Eigen::Vector2d(0, h), k3) - OpenCvDistort(phi, n - Eigen::Vector2d(0, h), k3)) / (2 * h);
+    jacobian.col(0) = (OpenCvDistort(phi, n + hx, k3) - OpenCvDistort(phi, n - hx, k3)) / (2 * hx.x());
+    jacobian.col(1) = (OpenCvDistort(phi, n + hy, k3) - OpenCvDistort(phi, n - hy, k3)) / (2 * hy.y());
     const Eigen::Vector2d step = jacobian.partialPivLu().solve(OpenCvDistort(phi, n, k3) - distorted);
     n -= step;
     if (step.norm() < 1e-15) break;
@@ -531,11 +531,15 @@ TEST(BundleVsOpenCv, OurOpenCvModelIsOpenCvs) {
 
 // The fields: measured minus ideal, um, at 13 x 9 plate points over the format,
 // each tool's lens about its own principal point (docs/bundle-vs-opencv.md).
-// The raw difference OpenCV - platemeter holds OpenCV's model floor: its
+// The difference OpenCV - platemeter holds OpenCV's model floor: its
 // distortion form with k1, k2 cannot take seed 000's correction form (the
-// simulator's, platemeter's) exactly; OpenCV on the noise-free points shows it.
-// What should agree within the 0.3 sigma is the rest: how the two
-// tools' estimates follow the same noise.
+// simulator's and platemeter's) exactly; OpenCV on the noise-free points shows
+// it. It is held to the 0.3 sigma where platemeter's field sigma is at
+// least 1 nm: that leaves out one grid point, (0, 0), 36 um from the principal
+// point, where the field is zero by construction (8e-5 um, sigma 2e-6 um) and
+// the ratio compares the models' second-order terms, not the estimates. With
+// the floor taken out (how the two estimates follow the same noise) every
+// point is held to 0.3 sigma.
 TEST(BundleVsOpenCv, DistortionFieldsAgreeWithinAThirdOfPlatemetersSigma) {
   const Comparison& c = Compare();
   SCOPED_TRACE(c.platemeter.summary);
@@ -545,21 +549,24 @@ TEST(BundleVsOpenCv, DistortionFieldsAgreeWithinAThirdOfPlatemetersSigma) {
   const Vec7 truth = TrueTheta(c.options.camera);
   const Vec7 steps = Steps(c.platemeter.covariance);
   const sim::PixelMapping& pixels = c.target.pixels;
+  const double kNoSigma_um = 1e-3;  // a field component known better than this is zero by construction
   const auto um = [](const Eigen::Vector2d& v) { return Eigen::Vector2d(v * 1e3); };
   struct Worst {
     double sigmas = 0.0, um = 0.0;
     Eigen::Vector2d where = Eigen::Vector2d::Zero();
-    void Add(const Eigen::Vector2d& d, const Eigen::Vector2d& sigma, const Eigen::Vector2d& p) {
+    void Add(const Eigen::Vector2d& d, const Eigen::Vector2d& sigma, const Eigen::Vector2d& p, double min_sigma = 0.0) {
       for (int a = 0; a < 2; ++a) {
+        if (sigma[a] < min_sigma) continue;
         if (std::abs(d[a]) / sigma[a] > sigmas) sigmas = std::abs(d[a]) / sigma[a], where = p;
         um = std::max(um, std::abs(d[a]));
       }
     }
   };
-  Worst raw_away;  // raw, where platemeter's field sigma is at least 0.01 um  TMP
-  Worst raw, beyond_floor, platemeter_vs_truth, opencv_vs_truth, platemeter_floor, opencv_floor;
+  Worst raw, raw_everywhere, beyond_floor, platemeter_vs_truth, opencv_vs_truth, platemeter_floor, opencv_floor;
   double largest_field = 0.0, largest_sigma = 0.0;
-  std::printf("\n  plate mm    | platemeter um   sigma um    | OpenCV-platemeter (sigmas)  | OpenCV floor | truth um\n");
+  int left_out = 0;
+  std::printf("\n  plate mm    | platemeter um   sigma um    | OpenCV-platemeter (sigmas)  "
+              "| OpenCV floor | truth um\n");
   for (const Eigen::Vector2d& p : FormatGrid(c.options, 13, 9)) {
     Eigen::Matrix<double, 2, 7> j;  // d field / d theta (c's column is zero: the field does not depend on it)
     for (int k = 0; k < 7; ++k) {
@@ -572,10 +579,8 @@ TEST(BundleVsOpenCv, DistortionFieldsAgreeWithinAThirdOfPlatemetersSigma) {
     const Eigen::Vector2d cv = um(OpenCvField_mm(c.opencv.phi, pixels, p));
     const Eigen::Vector2d tr = um(PlatemeterField_mm(truth, p));
     const Eigen::Vector2d floor = um(OpenCvField_mm(c.opencv_exact.phi, pixels, p)) - tr;
-    raw.Add(cv - pm, sigma, p);
-    if (sigma.minCoeff() >= 0.01) raw_away.Add(cv - pm, sigma, p); else std::printf("  excluded %.2f %.2f sigma %.2e %.2e\n", p.x(), p.y(), sigma.x(), sigma.y());
-    static double smin = 1e9; if (sigma.minCoeff() >= 0.01 && sigma.minCoeff() < smin) { smin = sigma.minCoeff(); std::printf("  min kept sigma %.4f at %.2f %.2f\n", smin, p.x(), p.y()); }
-    if (p.norm() < 1e-9) std::printf("  at 0,0: sigma %.3e %.3e um, field %.3e %.3e um, diff %.3e %.3e um\n", sigma.x(), sigma.y(), pm.x(), pm.y(), (cv-pm).x(), (cv-pm).y());
+    raw.Add(cv - pm, sigma, p, kNoSigma_um);
+    raw_everywhere.Add(cv - pm, sigma, p);
     beyond_floor.Add(cv - pm - floor, sigma, p);
     platemeter_vs_truth.Add(pm - tr, sigma, p);
     opencv_vs_truth.Add(cv - tr, sigma, p);
@@ -583,9 +588,15 @@ TEST(BundleVsOpenCv, DistortionFieldsAgreeWithinAThirdOfPlatemetersSigma) {
     opencv_floor.Add(floor, sigma, p);
     largest_field = std::max(largest_field, pm.norm());
     largest_sigma = std::max({largest_sigma, sigma.x(), sigma.y()});
+    if (sigma.minCoeff() < kNoSigma_um) {
+      ++left_out;
+      std::printf("  left out: %.1f %.1f mm, field %.1e %.1e um, sigma %.1e %.1e um, "
+                  "OpenCV - platemeter %.1e %.1e um\n",
+                  p.x(), p.y(), pm.x(), pm.y(), sigma.x(), sigma.y(), (cv - pm).x(), (cv - pm).y());
+    }
     const bool corner_or_axis = (std::abs(std::abs(p.x()) - 8.7) < 1e-9 || std::abs(p.x()) < 1e-9) &&
                                 (std::abs(std::abs(p.y()) - 5.7) < 1e-9 || std::abs(p.y()) < 1e-9);
-    if (corner_or_axis) {
+    if (corner_or_axis && sigma.minCoeff() >= kNoSigma_um) {
       const Eigen::Vector2d d = cv - pm;
       std::printf("  %5.1f %5.1f | %7.2f %7.2f %5.2f %5.2f | %6.3f %6.3f (%5.2f %5.2f) | %6.3f %6.3f | %7.2f %7.2f\n",
                   p.x(), p.y(), pm.x(), pm.y(), sigma.x(), sigma.y(), d.x(), d.y(), d.x() / sigma.x(),
@@ -596,23 +607,26 @@ TEST(BundleVsOpenCv, DistortionFieldsAgreeWithinAThirdOfPlatemetersSigma) {
   std::printf("  field up to %.1f um; platemeter's field sigma up to %.2f um (noise %.2f um = %.2f px)\n",
               largest_field, largest_sigma, c.options.sigma_um, c.options.sigma_um / pixel_um);
   const auto line = [](const char* what, const Worst& w) {
-    std::printf("  %-38s max %.4f um, %.3f sigma (at %5.1f %5.1f mm)\n", what, w.um, w.sigmas, w.where.x(),
+    std::printf("  %-40s max %.4f um, %.3f sigma (at %5.1f %5.1f mm)\n", what, w.um, w.sigmas, w.where.x(),
                 w.where.y());
   };
-  line("OpenCV - platemeter:", raw);
-  line("TMP raw away:", raw_away);
+  line("OpenCV - platemeter (sigma >= 1 nm):", raw);
+  line("OpenCV - platemeter (every point):", raw_everywhere);
   line("OpenCV's floor (noise-free) - truth:", opencv_floor);
-  line("(OpenCV - platemeter) - floor:", beyond_floor);
+  line("(OpenCV - platemeter) - OpenCV's floor:", beyond_floor);
   line("platemeter - truth:", platemeter_vs_truth);
   line("OpenCV - truth:", opencv_vs_truth);
   line("platemeter noise-free - truth:", platemeter_floor);
-  std::printf("  noise-free rms residual: OpenCV %.4f um (k3 fixed), %.4f um (k3 free)\n", c.opencv_exact.rms_px * pixel_um,
-              c.opencv_exact_k3.rms_px * pixel_um);
+  std::printf("  noise-free rms residual: OpenCV %.4f um (k3 fixed), %.4f um (k3 free)\n",
+              c.opencv_exact.rms_px * pixel_um, c.opencv_exact_k3.rms_px * pixel_um);
 
-  // The bar, on what should agree: the two estimates follow the noise alike.
+  // The bar.
+  EXPECT_LE(left_out, 1);
+  EXPECT_LT(raw.sigmas, 0.3);
+  // What should agree at every point: the two estimates follow the noise alike.
   EXPECT_LT(beyond_floor.sigmas, 0.3);
   // OpenCV's floor: a model difference of second order in the distortion
-  // (3 k1 r^2 = 1.8 % of the field at the corner before k1, k2 absorb most of it).
+  // (3 k1 r^2 = 1.8 % of the field at the corner, before k1, k2 absorb most of it).
   EXPECT_LT(opencv_floor.um, 0.01 * largest_field);
   // Platemeter's model is the simulator's: no floor.
   EXPECT_LT(platemeter_floor.um, 1e-4);
@@ -645,10 +659,13 @@ TEST(BundleVsOpenCv, SigmasAgreeWithStdDeviationsIntrinsicsScaledAlike) {
   const double platemeter_sigma0_px = c.platemeter.sigma0 * px_per_sigma;
   std::printf("\n  OpenCV %s: rms %.4f px over %d points, %d unknowns, sum r^2 %.4f px^2\n", CV_VERSION, cv.rms_px,
               cv.points, cv.unknowns, cv.sum_squares_px2);
-  std::printf("  its stdDev^2 / diag((J'J)^-1) = %.6g px^2 = sum r^2 / (%s - p); scaled alike by sqrt(%.6g / %.6g) = %.4f\n",
+  std::printf("  its stdDev^2 / diag((J'J)^-1) = %.6g px^2 = sum r^2 / (%s - p); "
+              "scaled alike by sqrt(%.6g / %.6g) = %.4f\n",
               implied.mean(), per_point ? "n points" : "2 n", sigma2_residuals, implied.mean(), rescale);
-  std::printf("  sigma0: OpenCV sqrt(sum r^2 / (2n - p)) = %.5f px, platemeter %.4f x %.2f px = %.5f px (dof %.0f)\n",
-              std::sqrt(sigma2_residuals), c.platemeter.sigma0, px_per_sigma, platemeter_sigma0_px, c.platemeter.dof);
+  std::printf("  sigma0: OpenCV sqrt(sum r^2 / (2n - p)) = %.5f px, platemeter %.4f x %.2f px = %.5f px "
+              "(dof %.0f, sum r^2 %.4f px^2 in the ideal plane)\n",
+              std::sqrt(sigma2_residuals), c.platemeter.sigma0, px_per_sigma, platemeter_sigma0_px, c.platemeter.dof,
+              c.platemeter.sum_squares_px2);
   EXPECT_NEAR(platemeter_sigma0_px / std::sqrt(sigma2_residuals), 1.0, 0.01);
   EXPECT_NEAR(c.platemeter.dof, 2.0 * cv.points - cv.unknowns, 0.5);
 

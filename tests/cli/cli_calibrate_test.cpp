@@ -135,3 +135,72 @@ TEST(CliCalibrate, NeitherJobNorObservationsIsAnError) {
 
 }  // namespace
 }  // namespace platemeter
+
+namespace platemeter {
+namespace {
+
+// A job with two cameras (orbits 1-2 and orbit 3 of the Table 9 block, the same
+// true lens), a-priori stations on orbit 1 (Gyer's sigmas: the datum), a gross
+// error found by the robust pass, and exports.
+TEST(CliCalibrate, JobWithTwoCamerasStationPriorsAndAGrossError) {
+  testing::TempDir dir;
+  sim::LunarBlockOptions options = sim::Seed000Table9Options(80.0);
+  options.seed = 5;
+  sim::SimulatedBlock block = sim::SimulateLunarBlock(options);
+  std::vector<ImageObservation> observations = block.input.observations;
+  observations[100].x_mm += 0.5;  // 33 sigma
+  const std::string gross = observations[100].frame + " " + observations[100].point_id;
+  WriteObservationsCsv(dir.file("observations.csv"), observations);
+  std::string job = R"(observations = ["observations.csv"]
+[output]
+title = "two cameras"
+export_pixel_size_um = 10.0
+export_image_size_px = [5500, 5500]
+[adjustment]
+robust_loss_scale = 3.0
+)";
+  for (const char* name : {"a", "b"}) {
+    job += std::string("[[camera]]\nname = \"") + name +
+           "\"\nformat_mm = [55.0, 55.0]\nc_mm = { value = 80.3, state = \"free\" }\n"
+           "xp_mm = \"free\"\nyp_mm = \"free\"\nk1_per_mm2 = \"free\"\np1_per_mm = \"free\"\np2_per_mm = \"free\"\n";
+  }
+  for (size_t f = 0; f < block.input.frames.size(); ++f) {
+    const sim::StationTruth& s = block.truth.stations[f];
+    job += "[[frame]]\nid = \"" + s.id + "\"\ncamera = \"" + (s.id.rfind("R3", 0) == 0 ? "b" : "a") + "\"\n";
+    if (s.group == 1) {
+      const auto& p = s.position_m;
+      const auto& v = s.velocity_direction;
+      job += "position_m = [" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " + std::to_string(p.z()) +
+             "]\nangles_deg = [" + std::to_string(s.angles.phi_rad * 180 / M_PI) + ", " +
+             std::to_string(s.angles.omega_rad * 180 / M_PI) + ", " + std::to_string(s.angles.kappa_rad * 180 / M_PI) +
+             "]\nin_track_sigma_m = 50.0\ncross_track_sigma_m = 10.0\nradial_sigma_m = 10.0\nvelocity_m_per_s = [" +
+             std::to_string(v.x()) + ", " + std::to_string(v.y()) + ", " + std::to_string(v.z()) + "]\n";
+    }
+  }
+  std::ofstream(dir.file("job.toml")) << job;
+  const std::string out = dir.file("out");
+  const auto run = RunPlatemeter("calibrate bundle --quiet '" + dir.file("job.toml") + "' -o '" + out + "'");
+  if (getenv("PLATEMETER_KEEP")) std::filesystem::copy(out, "/tmp/pm/job_out", std::filesystem::copy_options::recursive | std::filesystem::copy_options::overwrite_existing);
+  ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+  const nlohmann::json j = nlohmann::json::parse(ReadText(out + "/calibration.json"));
+  EXPECT_EQ(j["datum"]["kind"], "control") << j["datum"];
+  EXPECT_EQ(j["rank"]["datum_defect"], 0);
+  EXPECT_EQ(j["rejected_observations"], 1);
+  EXPECT_EQ(j["worst_observations"][0]["status"], "rejected");
+  EXPECT_EQ(j["worst_observations"][0]["frame"].get<std::string>() + " " +
+                j["worst_observations"][0]["point_id"].get<std::string>(),
+            gross);
+  EXPECT_NEAR(j["sigma0"].get<double>(), 1.0, 0.1);
+  ASSERT_EQ(j["cameras"].size(), 2u);
+  for (const auto& camera : j["cameras"]) {
+    const auto& c = camera["parameters"]["c_mm"];
+    EXPECT_LT(std::abs(c["value"].get<double>() - 80.0), 4.0 * c["sigma"].get<double>()) << camera["name"];
+  }
+  for (const char* name : {"camera-a.toml", "camera-b.toml", "camera-a-opencv.yaml", "camera-a-micmac.xml",
+                           "camera-a.tsai", "camera-b.tsai"}) {
+    EXPECT_TRUE(std::filesystem::exists(out + "/" + name)) << name;
+  }
+}
+
+}  // namespace
+}  // namespace platemeter

@@ -36,7 +36,13 @@ enum class BlockKind { kGlobal, kStation, kPoint };
 
 struct AdjustmentOptions {
   double robust_loss_scale = 0.0;     // sigma units; > 0: a first pass with a Cauchy loss
-  double rejection_threshold = 4.0;   // sigma units; after the robust pass, |residual|/(sigma sigma0) above this is rejected
+  // After the robust pass an observation is rejected when a component of its
+  // residual / (a-priori sigma x the pass's robust sigma0) exceeds this; 0 =
+  // the level a good observation's residual exceeds with probability
+  // false_rejection_rate over all the observations (Bonferroni: about 4.7
+  // sigma for 4000 components at 1 %).
+  double rejection_threshold = 0.0;   // sigma units
+  double false_rejection_rate = 0.01; // -; chance that any good observation is rejected (threshold 0)
   int max_iterations = 100;           // Levenberg-Marquardt iterations per pass
   double function_tolerance = 1e-12;  // relative cost change that ends a pass
   double correlation_threshold = 0.9; // |rho| named in the report

@@ -22,8 +22,10 @@ struct BundleOptions {
   // weighted pass whose statistics are reported.
   double robust_loss_scale = 0.0;  // sigma units
   // After the robust pass, an observation whose normalized residual (residual /
-  // its a-priori sigma, scaled by the pass's sigma0) exceeds this is rejected.
-  double rejection_threshold = 4.0;  // sigma units
+  // its a-priori sigma, scaled by the pass's robust sigma0) exceeds this is
+  // rejected; 0 = from false_rejection_rate (adjustment.h).
+  double rejection_threshold = 0.0;   // sigma units
+  double false_rejection_rate = 0.01; // -; chance that any good observation is rejected (threshold 0)
   int max_iterations = 100;          // Levenberg-Marquardt iterations per pass
   double function_tolerance = 1e-12;  // relative change of the cost that ends a pass
   // Correlations of the inner cone (and of any reported block) at or above

@@ -238,32 +238,35 @@ void ComputePointEstimates(const AdjustmentProblem::Impl& impl, const ReducedNor
     int free = 0;
     for (int i = 0; i < 3; ++i) free += block.IsFixed(i) ? 0 : 1;
     if (p.rank == free) {
-      // Q_pp = N_pp^-1 + N_pp^-1 N_pg Q_gg N_gp N_pp^-1 over the estimable rows.
-      Eigen::Matrix3d q = p.n_pp_inverse;
+      // Q_pp = N_pp^-1 + A Q_gg A^T, A = N_pp^-1 N_pg over the point's estimable blocks' rows.
+      std::vector<int> rows;
       bool complete = true;
-      std::vector<std::pair<std::vector<int>, Eigen::MatrixXd>> parts;  // (cofactor rows, A = N_pp^-1 N_pb)
       for (const auto& [b, n_pb] : p.n_pb) {
         const AdjustmentBlock& other = impl.blocks[b];
-        std::vector<int> rows(other.names.size(), -1);
-        Eigen::MatrixXd a = p.n_pp_inverse * n_pb;
         for (size_t i = 0; i < other.names.size(); ++i) {
           const int param = other.global_offset + static_cast<int>(i);
-          rows[i] = result->covariance_row[param];
-          if (rows[i] < 0 && result->parameters[param].status == EstimateStatus::kNotEstimable) complete = false;
-        }
-        parts.emplace_back(std::move(rows), std::move(a));
-      }
-      for (const auto& [rows_a, a] : parts) {
-        for (const auto& [rows_b, b] : parts) {
-          for (size_t i = 0; i < rows_a.size(); ++i) {
-            if (rows_a[i] < 0) continue;
-            for (size_t j = 0; j < rows_b.size(); ++j) {
-              if (rows_b[j] < 0) continue;
-              q.noalias() += result->cofactor(rows_a[i], rows_b[j]) * a.col(i) * b.col(j).transpose();
-            }
+          const int row = result->covariance_row[param];
+          if (row >= 0) {
+            rows.push_back(row);
+          } else if (result->parameters[param].status == EstimateStatus::kNotEstimable) {
+            complete = false;
           }
         }
       }
+      Eigen::MatrixXd a(3, rows.size());
+      int k = 0;
+      for (const auto& [b, n_pb] : p.n_pb) {
+        const AdjustmentBlock& other = impl.blocks[b];
+        for (size_t i = 0; i < other.names.size(); ++i) {
+          if (result->covariance_row[other.global_offset + static_cast<int>(i)] >= 0) a.col(k++) = n_pb.col(i);
+        }
+      }
+      a = p.n_pp_inverse * a;
+      Eigen::MatrixXd q_sub(rows.size(), rows.size());
+      for (size_t i = 0; i < rows.size(); ++i) {
+        for (size_t j = 0; j < rows.size(); ++j) q_sub(i, j) = result->cofactor(rows[i], rows[j]);
+      }
+      const Eigen::Matrix3d q = p.n_pp_inverse + a * q_sub * a.transpose();
       if (complete) estimate.sigma = scale * q.diagonal().cwiseMax(0.0).cwiseSqrt();
     }
     result->points.push_back(std::move(estimate));

@@ -106,18 +106,31 @@ ReducedNormals BuildReducedNormals(const AdjustmentProblem::Impl& impl) {
       it->second.noalias() += jp.transpose() * jacobians[i];
     }
   }
-  // Eliminate each point: N_gg -= N_gp N_pp^-1 N_pg.
+  // Eliminate each point: N_gg -= N_gp N_pp^-1 N_pg, with the point's blocks
+  // stacked into one 3 x m matrix so that the product is one dense product.
   for (PointNormals& point : normals.points) {
     if (point.block < 0) continue;
     point.rank = PointInverse(impl.blocks[point.block], point.n_pp, &point.n_pp_inverse);
+    int m = 0;
+    for (const auto& [b, n_pb] : point.n_pb) m += static_cast<int>(n_pb.cols());
+    Eigen::MatrixXd stack(3, m);
+    m = 0;
+    for (const auto& [b, n_pb] : point.n_pb) {
+      stack.middleCols(m, n_pb.cols()) = n_pb;
+      m += static_cast<int>(n_pb.cols());
+    }
+    const Eigen::MatrixXd product = stack.transpose() * (point.n_pp_inverse * stack);
+    int row = 0;
     for (const auto& [a_block, n_pa] : point.n_pb) {
       const AdjustmentBlock& a = impl.blocks[a_block];
-      const Eigen::MatrixXd left = n_pa.transpose() * point.n_pp_inverse;
+      int col = 0;
       for (const auto& [b_block, n_pb] : point.n_pb) {
         const AdjustmentBlock& b = impl.blocks[b_block];
-        normals.n_gg.block(a.global_offset, b.global_offset, a.names.size(), b.names.size()).noalias() -=
-            left * n_pb;
+        normals.n_gg.block(a.global_offset, b.global_offset, a.names.size(), b.names.size()) -=
+            product.block(row, col, a.names.size(), b.names.size());
+        col += static_cast<int>(b.names.size());
       }
+      row += static_cast<int>(a.names.size());
     }
   }
   return normals;

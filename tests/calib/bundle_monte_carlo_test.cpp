@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <random>
 
 #include "platemeter/calib/bundle_adjustment.h"
@@ -87,6 +88,72 @@ TEST(BundleMonteCarlo, InnerConeSpreadMatchesPredictedSigmasInSeed000Section4Geo
   EXPECT_LT(mean_sigma0, 1.05);
   EXPECT_GE(rejection_rate, 0.02);
   EXPECT_LE(rejection_rate, 0.08);
+}
+
+}  // namespace
+}  // namespace platemeter
+
+namespace platemeter {
+namespace {
+
+// The frames' and points' sigmas, whose values depend on the datum: control
+// points (every 10th passpoint, fixed) fix it, so every estimate has a truth.
+TEST(BundleMonteCarlo, FrameAndPointSpreadMatchesPredictedSigmasWithControlPoints) {
+  sim::LunarBlockOptions options = sim::Seed000Table9Options(80.0);
+  options.seed = 13;
+  const sim::SimulatedBlock block = sim::SimulateLunarBlock(options);
+  std::mt19937_64 rng(4711);
+  const int frames = static_cast<int>(block.input.frames.size());
+  std::vector<Sample> frame_spread(frames * 6);
+  std::map<std::string, Sample> point_spread[3];
+  for (int replicate = 0; replicate < kReplicates; ++replicate) {
+    BundleInput input = Renoised(block, &rng);
+    for (int i : {0, 1, 2, 3, 6, 7}) input.cameras[0].states[i] = ParameterState::Free();
+    for (size_t p = 0; p < input.ground_points.size(); p += 10) input.ground_points[p].sigma_m = {0.0, 0.0, 0.0};
+    const BundleResult result = RunBundleAdjustment(input, BundleOptions{});
+    ASSERT_EQ(result.datum, DatumKind::kControlPoints);
+    for (int f = 0; f < frames; ++f) {
+      const sim::StationTruth& truth = block.truth.stations[f];
+      const BundleFrameResult& frame = result.frames[f];
+      const double errors[6] = {frame.position_m.x() - truth.position_m.x(), frame.position_m.y() - truth.position_m.y(),
+                                frame.position_m.z() - truth.position_m.z(),
+                                std::remainder(frame.angles.phi_rad - truth.angles.phi_rad, 2 * M_PI),
+                                std::remainder(frame.angles.omega_rad - truth.angles.omega_rad, 2 * M_PI),
+                                std::remainder(frame.angles.kappa_rad - truth.angles.kappa_rad, 2 * M_PI)};
+      for (int k = 0; k < 6; ++k) {
+        ASSERT_TRUE(frame.sigmas[k].has_value());
+        frame_spread[f * 6 + k].Add(errors[k], *frame.sigmas[k] / result.adjustment.sigma0);
+      }
+    }
+    for (size_t p = 0; p < result.points.size(); p += 7) {  // every 7th point: a sample of free ones
+      const BundlePointResult& point = result.points[p];
+      if (point.control || !point.sigma_m) continue;
+      const Eigen::Vector3d& truth = block.truth.points[p].position_m;
+      ASSERT_EQ(block.truth.points[p].id, point.id);
+      for (int k = 0; k < 3; ++k) {
+        point_spread[k][point.id].Add(point.position_m[k] - truth[k], (*point.sigma_m)[k] / result.adjustment.sigma0);
+      }
+    }
+  }
+  double worst = 1.0;
+  auto check = [&](const Sample& s, const std::string& what) {
+    const double ratio = s.Spread() / s.MeanPredicted();
+    if (std::abs(ratio - 1.0) > std::abs(worst - 1.0)) worst = ratio;
+    EXPECT_GT(ratio, 0.8) << what;
+    EXPECT_LT(ratio, 1.2) << what;
+  };
+  for (int f = 0; f < frames; ++f) {
+    for (int k = 0; k < 6; ++k) check(frame_spread[f * 6 + k], block.input.frames[f].id + " " + kBundleFrameParamNames[k]);
+  }
+  int points = 0;
+  for (int k = 0; k < 3; ++k) {
+    for (const auto& [id, s] : point_spread[k]) {
+      check(s, "point " + id + " axis " + std::to_string(k));
+      ++points;
+    }
+  }
+  printf("%d frame parameters and %d point coordinates: spread / predicted sigma, the farthest from 1: %.3f\n",
+         frames * 6, points, worst);
 }
 
 }  // namespace

@@ -22,12 +22,7 @@
 #include "platemeter/calib/distortion_models.h"
 #include "platemeter/samples/bundle_block.h"
 
-#if __has_include(<opencv2/calib3d.hpp>)
 #include <opencv2/calib3d.hpp>
-#define BUNDLE_VS_OPENCV_HAS_OPENCV 1
-#else
-#define BUNDLE_VS_OPENCV_HAS_OPENCV 0
-#endif
 
 namespace platemeter {
 namespace {
@@ -365,7 +360,6 @@ TEST(BundleVsOpenCv, PlatemeterRecoversTheTrueFieldOfThePlanarTarget) {
   EXPECT_LT(worst, 4.0) << "platemeter's field against the truth, in its own sigmas";
 }
 
-#if BUNDLE_VS_OPENCV_HAS_OPENCV
 
 struct OpenCvFit {
   Vec7 phi = Vec7::Zero();      // f (= fy = fx), cx, cy, k1, k2, p1, p2
@@ -706,19 +700,6 @@ TEST(BundleVsOpenCv, SigmasAgreeWithStdDeviationsIntrinsicsScaledAlike) {
   }
 }
 
-#else
-
-TEST(BundleVsOpenCv, DistortionFieldsAgreeWithinAThirdOfPlatemetersSigma) {
-  GTEST_SKIP() << "OpenCV's headers are not on calib_tests' include path (tests/CMakeLists.txt: "
-                  "${OpenCV_INCLUDE_DIRS}); the comparison with calibrateCamera cannot be built";
-}
-
-TEST(BundleVsOpenCv, SigmasAgreeWithStdDeviationsIntrinsicsScaledAlike) {
-  GTEST_SKIP() << "OpenCV's headers are not on calib_tests' include path (tests/CMakeLists.txt: "
-                  "${OpenCV_INCLUDE_DIRS}); the comparison with calibrateCamera cannot be built";
-}
-
-#endif  // BUNDLE_VS_OPENCV_HAS_OPENCV
 
 }  // namespace
 }  // namespace platemeter

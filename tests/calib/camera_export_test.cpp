@@ -21,12 +21,7 @@
 #include "platemeter/grids/registry.h"
 #include "support/test_support.h"
 
-#if __has_include(<opencv2/calib3d.hpp>)
 #include <opencv2/calib3d.hpp>
-#define CAMERA_EXPORT_TEST_HAS_OPENCV 1
-#else
-#define CAMERA_EXPORT_TEST_HAS_OPENCV 0
-#endif
 
 namespace platemeter {
 namespace {
@@ -91,7 +86,6 @@ double MaxDistance(const std::vector<Eigen::Vector2d>& a, const std::vector<Eige
   return max;
 }
 
-#if CAMERA_EXPORT_TEST_HAS_OPENCV
 std::vector<Eigen::Vector2d> CvProjectPoints(const OpenCvCamera& camera, const std::vector<Eigen::Vector3d>& points) {
   std::vector<cv::Point3d> object;
   for (const auto& p : points) object.emplace_back(p.x(), p.y(), p.z());
@@ -103,7 +97,6 @@ std::vector<Eigen::Vector2d> CvProjectPoints(const OpenCvCamera& camera, const s
   for (const auto& q : image) out.emplace_back(q.x, q.y);
   return out;
 }
-#endif
 
 // The value of "<tag>...</tag>" (first occurrence) in an XML text.
 std::string XmlValue(const std::string& xml, const std::string& tag, size_t from = 0) {
@@ -154,9 +147,7 @@ TEST(CameraExportOpenCv, PureBrownRadialDecenteringFitIsSmallAndAgreesWithProjec
   const Rays rays = RaysOverFormat(source, options);
   const double stated = report.max_residual_px * 1.05 + 1e-9;
   EXPECT_LE(MaxDistance(ProjectWithOpenCv(cv, rays.in_opencv_frame), rays.platemeter_px), stated);
-#if CAMERA_EXPORT_TEST_HAS_OPENCV
   EXPECT_LE(MaxDistance(CvProjectPoints(cv, rays.in_opencv_frame), rays.platemeter_px), stated);
-#endif
   if (OpenCvProjectionAvailable()) {
     EXPECT_EQ(report.projected_with, "cv::projectPoints");
   }
@@ -211,7 +202,6 @@ TEST(CameraExportOpenCv, DistortionFreeCameraIsExact) {
   ASSERT_EQ(d.size(), 5u);
   for (double v : d) EXPECT_NEAR(v, 0.0, 1e-10);  // zero up to the fit's rounding
   EXPECT_NE(yaml.find("   rows: 1\n   cols: 5\n   dt: d\n"), std::string::npos);
-#if CAMERA_EXPORT_TEST_HAS_OPENCV
   cv::FileStorage storage(yaml, cv::FileStorage::READ | cv::FileStorage::MEMORY);
   ASSERT_TRUE(storage.isOpened());
   cv::Mat camera_matrix, dist_coeffs;
@@ -221,7 +211,6 @@ TEST(CameraExportOpenCv, DistortionFreeCameraIsExact) {
   EXPECT_NEAR(camera_matrix.at<double>(1, 2), 6001.6, 1e-9);
   EXPECT_EQ(dist_coeffs.cols, 5);
   EXPECT_EQ(static_cast<int>(storage["image_width"]), 12000);
-#endif
 }
 
 TEST(CameraExportOpenCv, PixelConventionIsExplicit) {

@@ -379,8 +379,9 @@ void RunTable9(const Args& args) {
 // ---------------------------------------------------------------------------
 // (iii) The platemeter engine.
 //
-// >>> SLOT for the platemeter bundle engine (calib/bundle_adjustment.h) <<<
-// When the engine exists, run it here on `input` with the same adjustment as
+// >>> SLOT for the platemeter bundle engine (calib/bundle_adjustment.h
+//     RunBundleAdjustment) <<<
+// The engine's author wires it in here: run it on `input` with the same adjustment as
 // bare Ceres above (inner cone c, xp, yp, k1..k3, p1, p2 free, b1 and b2 fixed;
 // datum: the first frame fixed and the second frame's X) and fill:
 //   wall_s      the engine's wall time (s) for the adjustment and its covariances
@@ -398,7 +399,7 @@ struct EngineRun {
 EngineRun RunPlatemeterEngine(const BundleInput& input) {
   (void)input;
   EngineRun run;
-  run.note = "not run: the platemeter bundle engine does not exist yet (bench/bench_bundle.cpp RunPlatemeterEngine)";
+  run.note = "not run: the engine is not wired in here yet (bench/bench_bundle.cpp RunPlatemeterEngine)";
   return run;
 }
 

@@ -48,6 +48,7 @@ BundleCameraResult CollectCamera(const CameraSetup& setup, const AdjustmentResul
   camera.name = setup.name;
   camera.format_width_mm = setup.format_width_mm;
   camera.format_height_mm = setup.format_height_mm;
+  camera.definition = setup.definition;
   const std::string label = "camera " + setup.name;
   for (int i = 0; i < kBundleCameraParams; ++i) {
     const int index = a.Find(label, kBundleCameraParamNames[i]);

@@ -92,6 +92,7 @@ CameraSetup CameraSetupFromDefinition(const CameraDefinition& definition, const 
   camera.name = name.empty() ? definition.name : name;
   camera.format_width_mm = definition.format_width_mm;
   camera.format_height_mm = definition.format_height_mm;
+  camera.definition = definition;
   const std::string subject = "camera " + definition.name;
   auto warn = [&](const std::string& reason) {
     if (warnings != nullptr) warnings->push_back({"camera " + camera.name, reason});

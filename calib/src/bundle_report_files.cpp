@@ -57,12 +57,17 @@ std::string FormatBundleResidualsCsv(const BundleResult& result) {
 
 CameraDefinition CalibratedCameraDefinition(const BundleResult& result, int index, const std::string& source) {
   const BundleCameraResult& camera = result.cameras.at(index);
-  CameraDefinition definition;
+  // The definition it started from keeps its grid, fiducials and format; the lens is new.
+  CameraDefinition definition = camera.definition.value_or(CameraDefinition{});
   definition.name = camera.name;
-  definition.description = "calibrated by platemeter's self-calibrating bundle adjustment (seed 000)";
+  definition.description = camera.definition ? "calibrated by platemeter's self-calibrating bundle adjustment from " +
+                                                   camera.definition->name
+                                             : "calibrated by platemeter's self-calibrating bundle adjustment (seed 000)";
   definition.source = source;
-  definition.format_width_mm = camera.format_width_mm > 0 ? camera.format_width_mm : 1.0;
-  definition.format_height_mm = camera.format_height_mm > 0 ? camera.format_height_mm : 1.0;
+  if (!camera.definition) {
+    definition.format_width_mm = camera.format_width_mm > 0 ? camera.format_width_mm : 1.0;
+    definition.format_height_mm = camera.format_height_mm > 0 ? camera.format_height_mm : 1.0;
+  }
   definition.nominal_principal_distance_mm = camera.values[0];
   LensCalibration lens;
   lens.model = "brown-affine";

@@ -43,6 +43,7 @@ struct BundleCameraResult {
   double format_width_mm = 0.0;   // mm; as given, or from the observations' extent
   double format_height_mm = 0.0;  // mm
   bool format_from_observations = false;  // no format was given: the extent of the observations
+  std::optional<CameraDefinition> definition;  // the definition it started from (CameraSetup::definition)
   // Significance tests (t for each radial term, F for the decentering pair and
   // the affinity pair), only for adjusted terms.
   std::vector<SignificanceTest> tests;

@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 
 #include "platemeter/calib/rotations.h"
+#include "platemeter/grids/definitions.h"
 
 namespace platemeter {
 
@@ -65,6 +66,9 @@ struct CameraSetup {
   std::array<ParameterState, kBundleCameraParams> states{};
   double format_width_mm = 0.0;   // mm; the imaged format (profiles, plots, corner sigmas); 0 if unknown
   double format_height_mm = 0.0;  // mm
+  // The camera definition it started from, if any: the calibrated camera keeps
+  // its grid, fiducials and format (so that measure can load it) with the new lens.
+  std::optional<CameraDefinition> definition;
 };
 
 // One frame (photograph). Exterior orientation in seed 000's T matrix

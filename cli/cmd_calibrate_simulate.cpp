@@ -14,80 +14,6 @@
 namespace platemeter::cli {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-double WrapDeg(double deg) {
-  double a = std::fmod(deg, 360.0);
-  if (a <= -180.0) a += 360.0;
-  if (a > 180.0) a -= 360.0;
-  return a;
-}
-
-// rotations.h R3(kappa): the image turned about the optical axis.
-Eigen::Matrix3d R3(double kappa_deg) {
-  const double k = kappa_deg * kPi / 180.0;
-  Eigen::Matrix3d r;
-  r << std::cos(k), std::sin(k), 0.0, -std::sin(k), std::cos(k), 0.0, 0.0, 0.0, 1.0;
-  return r;
-}
-
-bool InsideFormat(const sim::BundleCameraTruth& camera, const Eigen::Vector2d& p, double margin_mm) {
-  return std::abs(p.x()) <= 0.5 * camera.format_width_mm - margin_mm &&
-         std::abs(p.y()) <= 0.5 * camera.format_height_mm - margin_mm;
-}
-
-// Turns every frame to its roll in the plan's sequence and projects the
-// observations again (frame-major, points in order, as the simulator does).
-// Returns the number of passpoints dropped (fewer than two rays).
-int ApplyRolls(const PrecisionPlan& plan, const std::vector<double>& extra_deg, sim::SimulatedBlock* block) {
-  sim::BundleTruth& truth = block->truth;
-  BundleInput& input = block->input;
-  for (size_t f = 0; f < truth.stations.size(); ++f) {
-    if (extra_deg[f] == 0.0) continue;
-    sim::StationTruth& s = truth.stations[f];
-    s.image_from_object = R3(extra_deg[f]) * s.image_from_object;
-    s.angles = AnglesFromTMatrix(s.image_from_object);
-    s.roll_deg = WrapDeg(s.roll_deg + extra_deg[f]);
-    input.frames[f].angles = s.angles;
-  }
-  const double weight_mm = plan.image_sigma_um * 1e-3;
-  std::vector<std::vector<ImageObservation>> by_frame(truth.stations.size());
-  std::map<std::string, int> rays;
-  for (size_t f = 0; f < truth.stations.size(); ++f) {
-    const sim::StationTruth& s = truth.stations[f];
-    for (const sim::PointTruth& p : truth.points) {
-      Eigen::Vector2d xy;
-      if (!sim::ProjectPoint(truth.camera, s.image_from_object, s.position_m, p.position_m, &xy)) continue;
-      if (!InsideFormat(truth.camera, xy, plan.format_margin_mm)) continue;
-      ImageObservation o;
-      o.frame = s.id;
-      o.point_id = p.id;
-      o.x_mm = xy.x();
-      o.y_mm = xy.y();
-      o.sigma_x_mm = o.sigma_y_mm = weight_mm;
-      by_frame[f].push_back(std::move(o));
-      ++rays[p.id];
-    }
-  }
-  int dropped = 0;
-  std::vector<GroundPoint> kept_points;
-  for (const GroundPoint& g : input.ground_points) {
-    if (rays[g.id] >= 2) kept_points.push_back(g);
-    else ++dropped;
-  }
-  input.ground_points = std::move(kept_points);
-  input.observations.clear();
-  truth.observations.clear();
-  for (const auto& frame : by_frame) {
-    for (const ImageObservation& o : frame) {
-      if (rays[o.point_id] < 2) continue;
-      input.observations.push_back(o);
-      truth.observations.push_back(o);
-    }
-  }
-  return dropped;
-}
-
 struct SimulateArgs {
   std::string plan;
   std::string output_dir;
@@ -134,6 +60,7 @@ sim::LunarBlockOptions LunarBlockOptionsFromPlan(const PrecisionPlan& plan) {
   o.convergence_deg = plan.convergence_deg;
   o.kappa_start_deg = plan.kappa_start_deg;
   o.kappa_increment_deg = plan.kappa_increment_deg;
+  o.rolls_continue_across_orbits = plan.kappa_sequence == KappaSequence::kContinuous;
   o.passpoints = plan.passpoints;
   o.min_frames_per_point = plan.min_frames_per_point;
   o.relief_m = plan.relief_m;
@@ -149,17 +76,6 @@ PrecisionBlock SimulatePrecisionBlock(const PrecisionPlan& plan) {
   std::string why;
   if (!plan.Check(&why)) throw Error(plan.source.empty() ? "precision plan" : plan.source, why);
   sim::SimulatedBlock block = sim::SimulateLunarBlock(LunarBlockOptionsFromPlan(plan));
-  const int n = plan.exposures_per_orbit;
-  std::vector<double> extra(block.truth.stations.size(), 0.0);
-  bool any = false;
-  if (plan.kappa_sequence == KappaSequence::kContinuous) {
-    for (size_t f = 0; f < extra.size(); ++f) {
-      extra[f] = WrapDeg(block.truth.stations[f].group * n * plan.kappa_increment_deg);
-      any = any || extra[f] != 0.0;
-    }
-  }
-  const int dropped = any ? ApplyRolls(plan, extra, &block) : 0;
-
   PrecisionBlock out;
   out.input = std::move(block.input);
   for (const sim::StationTruth& s : block.truth.stations) {
@@ -172,16 +88,6 @@ PrecisionBlock SimulatePrecisionBlock(const PrecisionPlan& plan) {
   const size_t noise = out.summary.find(", sigma 0.0 um");
   if (noise != std::string::npos) {
     out.summary.replace(noise, 14, fmt::format(", noise-free, weighted by {:g} um", plan.image_sigma_um));
-  }
-  if (plan.kappa_sequence == KappaSequence::kContinuous) {
-    out.summary += fmt::format("; rolls continue from orbit to orbit ({:+g} deg per exposure over all {} exposures)",
-                               plan.kappa_increment_deg, extra.size());
-  } else {
-    out.summary += "; rolls start again on every orbit";
-  }
-  if (any) {
-    out.summary += fmt::format("; {} observations after the rolls", out.input.observations.size());
-    if (dropped > 0) out.summary += fmt::format(", {} passpoints left the formats", dropped);
   }
   return out;
 }

@@ -252,6 +252,7 @@ LunarBlockOptions Seed000Table9Options(double focal_length_mm) {
   o.camera.format_height_mm = 55.0;
   o.sigma_um = 15.0;
   o.passpoints = 215;
+  o.rolls_continue_across_orbits = true;
   return o;
 }
 
@@ -262,6 +263,7 @@ LunarBlockOptions Seed000Table10Options() {
   o.camera.format_height_mm = 114.3;
   o.sigma_um = 5.0;
   o.passpoints = 215;
+  o.rolls_continue_across_orbits = true;
   return o;
 }
 
@@ -382,7 +384,8 @@ SimulatedBlock SimulateLunarBlock(const LunarBlockOptions& options) {
                                                     std::cos(theta) * std::cos(beta));
       s.velocity_direction = Eigen::Vector3d(std::cos(theta), -std::sin(theta) * std::sin(beta),
                                              -std::sin(theta) * std::cos(beta));
-      s.roll_deg = WrapDeg(options.kappa_start_deg + j * options.kappa_increment_deg);
+      const int exposure = options.rolls_continue_across_orbits ? static_cast<int>(k) * n + j : j;
+      s.roll_deg = WrapDeg(options.kappa_start_deg + exposure * options.kappa_increment_deg);
       s.image_from_object = AttitudeFromAxis(target - s.position_m, s.velocity_direction, s.roll_deg);
       s.angles = AnglesFromTMatrix(s.image_from_object);
       s.group = static_cast<int>(k);
@@ -497,9 +500,11 @@ SimulatedBlock SimulateLunarBlock(const LunarBlockOptions& options) {
   char line[400];
   std::snprintf(line, sizeof(line),
                 "lunar block (seed 000): %zu frames on %zu orbits at %.1f km, convergence %.1f deg, kappa %+.0f deg "
-                "per exposure, c = %.1f mm on %.1f x %.1f mm, %zu passpoints, %zu observations, sigma %.1f um",
+                "per exposure%s, c = %.1f mm on %.1f x %.1f mm, %zu passpoints, %zu observations, sigma %.1f um",
                 block.truth.stations.size(), options.revolutions.size(), options.altitude_m * 1e-3,
-                options.convergence_deg, options.kappa_increment_deg, camera.c_mm, camera.format_width_mm,
+                options.convergence_deg, options.kappa_increment_deg,
+                options.rolls_continue_across_orbits ? " (continuing across orbits)" : "", camera.c_mm,
+                camera.format_width_mm,
                 camera.format_height_mm, block.truth.points.size(), block.truth.observations.size(), options.sigma_um);
   block.summary = line;
   return block;

@@ -148,6 +148,11 @@ struct LunarBlockOptions {
   double convergence_deg = 80.0;           // deg; between the optical axes of an orbit's end frames
   double kappa_start_deg = 0.0;            // deg; roll of the first exposure of every orbit
   double kappa_increment_deg = 90.0;       // deg; roll added from one exposure to the next (0: Apollo 14)
+  // true: the rolls carry on from orbit to orbit (exposure k of the whole
+  // sequence at kappa_start + k * increment: Fig. 3's "camera is rotated 90 deg
+  // between individual exposures", so that frames looking the same way differ
+  // in kappa, as section 2.3 asks); false: every orbit starts again at kappa_start.
+  bool rolls_continue_across_orbits = false;
   int passpoints = 215;
   int min_frames_per_point = 0;            // frames that must see a passpoint; 0 = all frames (the common area)
   double relief_m = 300.0;                 // m; passpoint heights uniform in +-relief/2 about the sphere
@@ -161,7 +166,9 @@ struct LunarBlockOptions {
 };
 
 // Seed 000 section 4, Table 9: a Hasselblad of the given focal length (50, 80,
-// 150 or 500 mm) on the 55 x 55 mm format, 15 um, 215 passpoints.
+// 150 or 500 mm) on the 55 x 55 mm format, 15 um, 215 passpoints, the rolls
+// carrying on across the orbits (docs/precision-simulation.md: restarting them
+// on every orbit gives 3 to 4 times the paper's sigmas in every row).
 LunarBlockOptions Seed000Table9Options(double focal_length_mm);
 // Seed 000 section 4, Table 10: the metric lunar terrain camera, 76.2 mm on
 // 114.3 x 114.3 mm, 5 um, otherwise the same geometry.

@@ -22,5 +22,6 @@ void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global);  // measure a
 void RegisterBatchCommand(CLI::App& app, GlobalOptions& global);    // batch: whole archives (docs/batch.md)
 void RegisterCamerasCommand(CLI::App& app, GlobalOptions& global);  // cameras profile (after RegisterGridsCommand)
 void RegisterCalibrateCommand(CLI::App& app, GlobalOptions& global);  // calibrate bundle (docs/bundle-job.md)
+void RegisterStarsCommand(CLI::App& app, GlobalOptions& global);  // stars apparent: observed places (docs/apparent-places.md)
 
 }  // namespace platemeter::cli

@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   cli::RegisterBatchCommand(app, global);
   cli::RegisterCamerasCommand(app, global);
   cli::RegisterCalibrateCommand(app, global);
+  cli::RegisterStarsCommand(app, global);
 
   try {
     app.parse(argc, argv);

@@ -10,6 +10,8 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <Eigen/SVD>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <fmt/format.h>
 
 #include "adjustment_internal.h"
@@ -228,7 +230,10 @@ void ComputeCovarianceAndRank(const AdjustmentProblem::Impl& impl, const Reduced
 void ComputePointEstimates(const AdjustmentProblem::Impl& impl, const ReducedNormals& normals,
                            AdjustmentResult* result) {
   const double scale = result->sigma0;
-  for (const PointNormals& p : normals.points) {
+  std::vector<AdjustmentResult::PointEstimate> estimates(normals.points.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, normals.points.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
+  for (size_t index = range.begin(); index < range.end(); ++index) {
+    const PointNormals& p = normals.points[index];
     if (p.block < 0) continue;
     const AdjustmentBlock& block = impl.blocks[p.block];
     AdjustmentResult::PointEstimate estimate;
@@ -269,7 +274,11 @@ void ComputePointEstimates(const AdjustmentProblem::Impl& impl, const ReducedNor
       const Eigen::Matrix3d q = p.n_pp_inverse + a * q_sub * a.transpose();
       if (complete) estimate.sigma = scale * q.diagonal().cwiseMax(0.0).cwiseSqrt();
     }
-    result->points.push_back(std::move(estimate));
+    estimates[index] = std::move(estimate);
+  }
+  });
+  for (size_t index = 0; index < normals.points.size(); ++index) {
+    if (normals.points[index].block >= 0) result->points.push_back(std::move(estimates[index]));
   }
 }
 

@@ -1,7 +1,12 @@
 // The normal equations reduced by eliminating each point block (seed 000
 // section 2.2: "elimination of the ground points so as to form the reduced
 // normal equations"), from the whitened Jacobians at the solution.
+#include <algorithm>
+
 #include <Eigen/Eigenvalues>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include "adjustment_internal.h"
 
@@ -42,97 +47,155 @@ int PointInverse(const AdjustmentBlock& block, const Eigen::Matrix3d& n_pp, Eige
   return rank;
 }
 
+// One equation's whitened residual and Jacobians (fixed columns zeroed).
+struct EvaluatedEquation {
+  std::vector<RowMajor> jacobians;
+  Eigen::VectorXd residual;
+  int point_slot = -1;  // which block is the point, -1 if none
+};
+
+bool Evaluate(const AdjustmentProblem::Impl& impl, const AdjustmentEquation& e, EvaluatedEquation* out) {
+  const size_t n = e.blocks.size();
+  out->jacobians.resize(n);
+  std::vector<double*> jacobian_pointers(n);
+  std::vector<const double*> parameters(n);
+  for (size_t i = 0; i < n; ++i) {
+    const AdjustmentBlock& block = impl.blocks[e.blocks[i]];
+    out->jacobians[i].resize(e.Dimension(), block.names.size());
+    jacobian_pointers[i] = out->jacobians[i].data();
+    parameters[i] = block.values.data();
+  }
+  out->residual.resize(e.Dimension());
+  if (!e.cost->Evaluate(parameters.data(), out->residual.data(), jacobian_pointers.data())) return false;
+  out->point_slot = -1;
+  for (size_t i = 0; i < n; ++i) {
+    const AdjustmentBlock& block = impl.blocks[e.blocks[i]];
+    for (int c = 0; c < static_cast<int>(block.names.size()); ++c) {
+      if (block.IsFixed(c)) out->jacobians[i].col(c).setZero();
+    }
+    if (block.kind == BlockKind::kPoint) out->point_slot = static_cast<int>(i);
+  }
+  return true;
+}
+
+// What one thread accumulates: the reduced matrix and the sums.
+struct Accumulator {
+  Eigen::MatrixXd n_gg;
+  double vtpv = 0.0;
+  long observation_rows = 0, prior_rows = 0;
+};
+
+// J_a^T J_b of every pair of non-point blocks of the equation.
+void AddGlobalTerms(const AdjustmentProblem::Impl& impl, const AdjustmentEquation& e, const EvaluatedEquation& x,
+                    Accumulator* sum) {
+  sum->vtpv += x.residual.squaredNorm();
+  (e.is_prior ? sum->prior_rows : sum->observation_rows) += e.Dimension();
+  for (size_t i = 0; i < e.blocks.size(); ++i) {
+    const AdjustmentBlock& a = impl.blocks[e.blocks[i]];
+    if (a.kind == BlockKind::kPoint) continue;
+    for (size_t j = 0; j < e.blocks.size(); ++j) {
+      const AdjustmentBlock& b = impl.blocks[e.blocks[j]];
+      if (b.kind == BlockKind::kPoint) continue;
+      sum->n_gg.block(a.global_offset, b.global_offset, a.names.size(), b.names.size()).noalias() +=
+          x.jacobians[i].transpose() * x.jacobians[j];
+    }
+  }
+}
+
+// A point's own normal blocks from its equations, then its elimination:
+// N_gg -= N_gp N_pp^-1 N_pg, its blocks stacked so the product is one product.
+void ReducePoint(const AdjustmentProblem::Impl& impl, const std::vector<int>& equations, PointNormals* point,
+                 Accumulator* sum) {
+  EvaluatedEquation x;
+  for (int index : equations) {
+    const AdjustmentEquation& e = impl.equations[index];
+    if (!Evaluate(impl, e, &x)) continue;
+    AddGlobalTerms(impl, e, x, sum);
+    const RowMajor& jp = x.jacobians[x.point_slot];
+    point->n_pp.noalias() += jp.transpose() * jp;
+    if (!e.is_prior) ++point->rays;
+    for (size_t i = 0; i < e.blocks.size(); ++i) {
+      if (static_cast<int>(i) == x.point_slot) continue;
+      const int block = e.blocks[i];
+      auto it = std::find_if(point->n_pb.begin(), point->n_pb.end(), [&](const auto& p) { return p.first == block; });
+      if (it == point->n_pb.end()) {
+        point->n_pb.emplace_back(block, Eigen::MatrixXd::Zero(3, x.jacobians[i].cols()));
+        it = point->n_pb.end() - 1;
+      }
+      it->second.noalias() += jp.transpose() * x.jacobians[i];
+    }
+  }
+  point->rank = PointInverse(impl.blocks[point->block], point->n_pp, &point->n_pp_inverse);
+  int m = 0;
+  for (const auto& [b, n_pb] : point->n_pb) m += static_cast<int>(n_pb.cols());
+  Eigen::MatrixXd stack(3, m);
+  m = 0;
+  for (const auto& [b, n_pb] : point->n_pb) {
+    stack.middleCols(m, n_pb.cols()) = n_pb;
+    m += static_cast<int>(n_pb.cols());
+  }
+  const Eigen::MatrixXd product = stack.transpose() * (point->n_pp_inverse * stack);
+  int row = 0;
+  for (const auto& [a_block, n_pa] : point->n_pb) {
+    const AdjustmentBlock& a = impl.blocks[a_block];
+    int col = 0;
+    for (const auto& [b_block, n_pb] : point->n_pb) {
+      const AdjustmentBlock& b = impl.blocks[b_block];
+      sum->n_gg.block(a.global_offset, b.global_offset, a.names.size(), b.names.size()) -=
+          product.block(row, col, a.names.size(), b.names.size());
+      col += static_cast<int>(b.names.size());
+    }
+    row += static_cast<int>(a.names.size());
+  }
+}
+
 }  // namespace
 
 ReducedNormals BuildReducedNormals(const AdjustmentProblem::Impl& impl) {
   ReducedNormals normals;
-  normals.n_gg = Eigen::MatrixXd::Zero(impl.num_global, impl.num_global);
   normals.points.resize(impl.num_points);
+  std::vector<std::vector<int>> point_equations(impl.num_points);
+  std::vector<int> other_equations;
   for (size_t b = 0; b < impl.blocks.size(); ++b) {
     if (impl.blocks[b].kind == BlockKind::kPoint) normals.points[impl.blocks[b].point_index].block = static_cast<int>(b);
   }
-  std::vector<RowMajor> jacobians;
-  std::vector<double*> jacobian_pointers;
-  std::vector<const double*> parameters;
-  Eigen::VectorXd residual;
-  for (const AdjustmentEquation& e : impl.equations) {
+  for (size_t k = 0; k < impl.equations.size(); ++k) {
+    const AdjustmentEquation& e = impl.equations[k];
     if (e.status != ObservationStatus::kUsed) continue;
-    const int d = e.Dimension();
-    const size_t n = e.blocks.size();
-    jacobians.resize(n);
-    jacobian_pointers.resize(n);
-    parameters.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-      const AdjustmentBlock& block = impl.blocks[e.blocks[i]];
-      jacobians[i].resize(d, block.names.size());
-      jacobian_pointers[i] = jacobians[i].data();
-      parameters[i] = block.values.data();
+    int point = -1;
+    for (int b : e.blocks) {
+      if (impl.blocks[b].kind == BlockKind::kPoint) point = impl.blocks[b].point_index;
     }
-    residual.resize(d);
-    if (!e.cost->Evaluate(parameters.data(), residual.data(), jacobian_pointers.data())) continue;
-    normals.vtpv += residual.squaredNorm();
-    (e.is_prior ? normals.prior_rows : normals.observation_rows) += d;
-    int point_slot = -1;
-    for (size_t i = 0; i < n; ++i) {
-      const AdjustmentBlock& block = impl.blocks[e.blocks[i]];
-      for (int c = 0; c < static_cast<int>(block.names.size()); ++c) {
-        if (block.IsFixed(c)) jacobians[i].col(c).setZero();
-      }
-      if (block.kind == BlockKind::kPoint) point_slot = static_cast<int>(i);
-    }
-    for (size_t i = 0; i < n; ++i) {
-      const AdjustmentBlock& a = impl.blocks[e.blocks[i]];
-      if (a.kind == BlockKind::kPoint) continue;
-      for (size_t j = 0; j < n; ++j) {
-        const AdjustmentBlock& b = impl.blocks[e.blocks[j]];
-        if (b.kind == BlockKind::kPoint) continue;
-        normals.n_gg.block(a.global_offset, b.global_offset, a.names.size(), b.names.size()).noalias() +=
-            jacobians[i].transpose() * jacobians[j];
-      }
-    }
-    if (point_slot < 0) continue;
-    PointNormals& point = normals.points[impl.blocks[e.blocks[point_slot]].point_index];
-    const RowMajor& jp = jacobians[point_slot];
-    point.n_pp.noalias() += jp.transpose() * jp;
-    if (!e.is_prior) ++point.rays;
-    for (size_t i = 0; i < n; ++i) {
-      if (static_cast<int>(i) == point_slot) continue;
-      const int block = e.blocks[i];
-      auto it = std::find_if(point.n_pb.begin(), point.n_pb.end(), [&](const auto& p) { return p.first == block; });
-      if (it == point.n_pb.end()) {
-        point.n_pb.emplace_back(block, Eigen::MatrixXd::Zero(3, jacobians[i].cols()));
-        it = point.n_pb.end() - 1;
-      }
-      it->second.noalias() += jp.transpose() * jacobians[i];
-    }
+    (point >= 0 ? point_equations[point] : other_equations).push_back(static_cast<int>(k));
   }
-  // Eliminate each point: N_gg -= N_gp N_pp^-1 N_pg, with the point's blocks
-  // stacked into one 3 x m matrix so that the product is one dense product.
-  for (PointNormals& point : normals.points) {
-    if (point.block < 0) continue;
-    point.rank = PointInverse(impl.blocks[point.block], point.n_pp, &point.n_pp_inverse);
-    int m = 0;
-    for (const auto& [b, n_pb] : point.n_pb) m += static_cast<int>(n_pb.cols());
-    Eigen::MatrixXd stack(3, m);
-    m = 0;
-    for (const auto& [b, n_pb] : point.n_pb) {
-      stack.middleCols(m, n_pb.cols()) = n_pb;
-      m += static_cast<int>(n_pb.cols());
+  // Points in parallel, each thread with its own reduced matrix, summed at the end.
+  tbb::enumerable_thread_specific<Accumulator> sums([&] {
+    Accumulator a;
+    a.n_gg = Eigen::MatrixXd::Zero(impl.num_global, impl.num_global);
+    return a;
+  });
+  tbb::parallel_for(tbb::blocked_range<int>(0, impl.num_points, 64), [&](const tbb::blocked_range<int>& range) {
+    Accumulator& sum = sums.local();
+    for (int p = range.begin(); p < range.end(); ++p) {
+      if (normals.points[p].block >= 0) ReducePoint(impl, point_equations[p], &normals.points[p], &sum);
     }
-    const Eigen::MatrixXd product = stack.transpose() * (point.n_pp_inverse * stack);
-    int row = 0;
-    for (const auto& [a_block, n_pa] : point.n_pb) {
-      const AdjustmentBlock& a = impl.blocks[a_block];
-      int col = 0;
-      for (const auto& [b_block, n_pb] : point.n_pb) {
-        const AdjustmentBlock& b = impl.blocks[b_block];
-        normals.n_gg.block(a.global_offset, b.global_offset, a.names.size(), b.names.size()) -=
-            product.block(row, col, a.names.size(), b.names.size());
-        col += static_cast<int>(b.names.size());
-      }
-      row += static_cast<int>(a.names.size());
-    }
+  });
+  Accumulator total;
+  total.n_gg = Eigen::MatrixXd::Zero(impl.num_global, impl.num_global);
+  EvaluatedEquation x;
+  for (int index : other_equations) {
+    if (Evaluate(impl, impl.equations[index], &x)) AddGlobalTerms(impl, impl.equations[index], x, &total);
   }
+  for (const Accumulator& sum : sums) {
+    total.n_gg += sum.n_gg;
+    total.vtpv += sum.vtpv;
+    total.observation_rows += sum.observation_rows;
+    total.prior_rows += sum.prior_rows;
+  }
+  normals.n_gg = std::move(total.n_gg);
+  normals.vtpv = total.vtpv;
+  normals.observation_rows = total.observation_rows;
+  normals.prior_rows = total.prior_rows;
   return normals;
 }
 

@@ -221,7 +221,8 @@ TEST(ModelConversionFit, GenericFieldFit) {
 TEST(ModelConversionFit, OrbigonDistortionFormAgainstBrown) {
   // Seed 001's model (kDistortion, about a point of symmetry) has no exact
   // Brown counterpart: the fit compares ideal coordinates and reports its residual.
-  const CameraDefinition& orbigon = DefinitionRegistry().Camera("orbigon");
+  const DefinitionRegistry registry;  // Camera() returns a reference into it
+  const CameraDefinition& orbigon = registry.Camera("orbigon");
   const LensEstimate lens = LensEstimateFromCalibration(*orbigon.lens, "orbigon");
   ConversionOptions options;
   options.format_width_mm = orbigon.format_width_mm;

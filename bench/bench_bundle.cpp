@@ -662,6 +662,89 @@ ToolRun TimedRun(const std::vector<std::string>& args, const fs::path& log, cons
   return run;
 }
 
+// The table of every method, then the inner cone against the truth and each
+// method's details, the covariance costs and the speed ratios.
+void PrintResults(const std::vector<Row>& rows, const sim::BundleTruth& truth, const Result& ceres_result,
+                  const Result& engine_result) {
+  // ---- The table ----
+  const auto tv = truth.camera.Values();
+  std::printf("\n%-46s %8s %9s %14s %10s %9s %9s %14s\n", "method", "wall s", "RSS MB", "RMS um (px)", "c mm",
+              "xp um", "yp um", "field err um");
+  std::printf("%-46s %8s %9s %14s %10.4f %9.2f %9.2f %14s\n", "truth", "", "", "", tv[0], tv[1] * 1e3, tv[2] * 1e3,
+              "rms / max");
+  for (const Row& r : rows) {
+    std::string rms = r.rms_um > 0 ? Fmt("%.3f", r.rms_um) + " (" + Fmt("%.3f", r.rms_px) + ")" : "";
+    if (!r.ran && r.method.rfind("simulation", 0) != 0) {
+      std::printf("%-46s %8s %9s %14s  %s\n", r.method.c_str(), "-", "-", "-", r.note.c_str());
+      continue;
+    }
+    std::printf("%-46s %8.2f %9.1f %14s", r.method.c_str(), r.wall_s, r.rss_mb, rms.c_str());
+    if (r.has_camera) {
+      std::printf(" %10.4f %9.2f %9.2f %7.2f / %.2f", r.camera[0], r.camera[1] * 1e3, r.camera[2] * 1e3,
+                  r.field.rms_um, r.field.max_um);
+    }
+    std::printf("\n");
+  }
+
+  // ---- Details ----
+  std::printf("\ninner cone, truth vs fitted (COLMAP's distortion converted to Brown's correction form, first order):\n");
+  std::printf("%-12s %14s", "parameter", "truth");
+  for (const Row& r : rows) {
+    if (r.has_camera) std::printf(" %22s", r.label.c_str());
+  }
+  std::printf("\n");
+  const auto ceres_sigma = ceres_result.count("camera_sigma") ? ceres_result.at("camera_sigma") : std::vector<double>{};
+  for (int i = 0; i < 8; ++i) {
+    std::printf("%-12s %14.6g", kBundleCameraParamNames[i], tv[i]);
+    for (const Row& r : rows) {
+      if (r.has_camera) std::printf(" %22.6g", r.camera[i]);
+    }
+    if (ceres_sigma.size() == kBundleCameraParams) std::printf("   (Ceres sigma %.3g)", ceres_sigma[i]);
+    std::printf("\n");
+  }
+  for (const Row& r : rows) std::printf("%s: %s\n", r.method.c_str(), r.note.c_str());
+  if (ceres_result.count("iterations")) {
+    std::printf("bare Ceres: %.0f iterations, solve %.2f s, sigma0 %.3f", ceres_result.at("iterations")[0],
+                ceres_result.at("solve_s")[0], ceres_result.at("sigma0")[0]);
+    if (ceres_result.count("stations")) {
+      const auto& s = ceres_result.at("stations");
+      double sum2 = 0;
+      for (std::size_t i = 0; i < truth.stations.size(); ++i) {
+        for (int k = 0; k < 3; ++k) sum2 += std::pow(s[3 * i + k] - truth.stations[i].position_m[k], 2);
+      }
+      std::printf(", station RMS error vs truth %.3f m", std::sqrt(sum2 / (3.0 * truth.stations.size())));
+    }
+    std::printf("\n");
+  }
+  if (ceres_result.count("covariance_s")) {
+    std::printf("ceres::Covariance (SPARSE_QR) of the inner cone and %zu frames: %s in %.2f s",
+                truth.stations.size() - 1, ceres_result.at("covariance_ok")[0] > 0 ? "ok" : "FAILED",
+                ceres_result.at("covariance_s")[0]);
+    if (ceres_result.count("pose_sigma_median")) {
+      std::printf("; frame sigmas median %.3f m / %.2f arcsec, max %.3f m / %.2f arcsec",
+                  ceres_result.at("pose_sigma_median")[0], ceres_result.at("pose_sigma_median")[1],
+                  ceres_result.at("pose_sigma_max")[0], ceres_result.at("pose_sigma_max")[1]);
+    }
+    std::printf("\n");
+  }
+  if (engine_result.count("covariance_s")) {
+    std::printf("platemeter engine: %.0f iterations, solve %.2f s, covariance of the inner cone, every frame and "
+                "every point %.2f s (%.2f x the solve), sigma0 %.3f\n",
+                engine_result.at("iterations")[0], engine_result.at("solve_s")[0], engine_result.at("covariance_s")[0],
+                engine_result.at("covariance_s")[0] / engine_result.at("solve_s")[0], engine_result.at("sigma0")[0]);
+    double engine_wall = 0.0;
+    for (const Row& r : rows) {
+      if (r.method == "platemeter engine") engine_wall = r.wall_s;
+    }
+    for (const Row& r : rows) {
+      if (r.ran && engine_wall > 0.0 && r.method.rfind("COLMAP", 0) == 0) {
+        std::printf("%s / platemeter engine (covariances included), wall time: %.1f x\n", r.method.c_str(),
+                    r.wall_s / engine_wall);
+      }
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -864,83 +947,7 @@ int main(int argc, char** argv) {
     }
   }
 
-  // ---- The table ----
-  const auto tv = truth.camera.Values();
-  std::printf("\n%-46s %8s %9s %14s %10s %9s %9s %14s\n", "method", "wall s", "RSS MB", "RMS um (px)", "c mm",
-              "xp um", "yp um", "field err um");
-  std::printf("%-46s %8s %9s %14s %10.4f %9.2f %9.2f %14s\n", "truth", "", "", "", tv[0], tv[1] * 1e3, tv[2] * 1e3,
-              "rms / max");
-  for (const Row& r : rows) {
-    std::string rms = r.rms_um > 0 ? Fmt("%.3f", r.rms_um) + " (" + Fmt("%.3f", r.rms_px) + ")" : "";
-    if (!r.ran && r.method.rfind("simulation", 0) != 0) {
-      std::printf("%-46s %8s %9s %14s  %s\n", r.method.c_str(), "-", "-", "-", r.note.c_str());
-      continue;
-    }
-    std::printf("%-46s %8.2f %9.1f %14s", r.method.c_str(), r.wall_s, r.rss_mb, rms.c_str());
-    if (r.has_camera) {
-      std::printf(" %10.4f %9.2f %9.2f %7.2f / %.2f", r.camera[0], r.camera[1] * 1e3, r.camera[2] * 1e3,
-                  r.field.rms_um, r.field.max_um);
-    }
-    std::printf("\n");
-  }
-
-  // ---- Details ----
-  std::printf("\ninner cone, truth vs fitted (COLMAP's distortion converted to Brown's correction form, first order):\n");
-  std::printf("%-12s %14s", "parameter", "truth");
-  for (const Row& r : rows) {
-    if (r.has_camera) std::printf(" %22s", r.label.c_str());
-  }
-  std::printf("\n");
-  const auto ceres_sigma = ceres_result.count("camera_sigma") ? ceres_result.at("camera_sigma") : std::vector<double>{};
-  for (int i = 0; i < 8; ++i) {
-    std::printf("%-12s %14.6g", kBundleCameraParamNames[i], tv[i]);
-    for (const Row& r : rows) {
-      if (r.has_camera) std::printf(" %22.6g", r.camera[i]);
-    }
-    if (ceres_sigma.size() == kBundleCameraParams) std::printf("   (Ceres sigma %.3g)", ceres_sigma[i]);
-    std::printf("\n");
-  }
-  for (const Row& r : rows) std::printf("%s: %s\n", r.method.c_str(), r.note.c_str());
-  if (ceres_result.count("iterations")) {
-    std::printf("bare Ceres: %.0f iterations, solve %.2f s, sigma0 %.3f", ceres_result.at("iterations")[0],
-                ceres_result.at("solve_s")[0], ceres_result.at("sigma0")[0]);
-    if (ceres_result.count("stations")) {
-      const auto& s = ceres_result.at("stations");
-      double sum2 = 0;
-      for (std::size_t i = 0; i < truth.stations.size(); ++i) {
-        for (int k = 0; k < 3; ++k) sum2 += std::pow(s[3 * i + k] - truth.stations[i].position_m[k], 2);
-      }
-      std::printf(", station RMS error vs truth %.3f m", std::sqrt(sum2 / (3.0 * truth.stations.size())));
-    }
-    std::printf("\n");
-  }
-  if (ceres_result.count("covariance_s")) {
-    std::printf("ceres::Covariance (SPARSE_QR) of the inner cone and %zu frames: %s in %.2f s",
-                truth.stations.size() - 1, ceres_result.at("covariance_ok")[0] > 0 ? "ok" : "FAILED",
-                ceres_result.at("covariance_s")[0]);
-    if (ceres_result.count("pose_sigma_median")) {
-      std::printf("; frame sigmas median %.3f m / %.2f arcsec, max %.3f m / %.2f arcsec",
-                  ceres_result.at("pose_sigma_median")[0], ceres_result.at("pose_sigma_median")[1],
-                  ceres_result.at("pose_sigma_max")[0], ceres_result.at("pose_sigma_max")[1]);
-    }
-    std::printf("\n");
-  }
-  if (engine_result.count("covariance_s")) {
-    std::printf("platemeter engine: %.0f iterations, solve %.2f s, covariance of the inner cone, every frame and "
-                "every point %.2f s (%.2f x the solve), sigma0 %.3f\n",
-                engine_result.at("iterations")[0], engine_result.at("solve_s")[0], engine_result.at("covariance_s")[0],
-                engine_result.at("covariance_s")[0] / engine_result.at("solve_s")[0], engine_result.at("sigma0")[0]);
-    double engine_wall = 0.0;
-    for (const Row& r : rows) {
-      if (r.method == "platemeter engine") engine_wall = r.wall_s;
-    }
-    for (const Row& r : rows) {
-      if (r.ran && engine_wall > 0.0 && r.method.rfind("COLMAP", 0) == 0) {
-        std::printf("%s / platemeter engine (covariances included), wall time: %.1f x\n", r.method.c_str(),
-                    r.wall_s / engine_wall);
-      }
-    }
-  }
+  PrintResults(rows, truth, ceres_result, engine_result);
   std::printf("work files and logs: %s\n", work.c_str());
   return 0;
 }

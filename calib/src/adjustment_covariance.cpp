@@ -72,11 +72,9 @@ NullDirection Describe(const Eigen::VectorXd& direction, const std::vector<Param
   return out;
 }
 
-}  // namespace
-
-void ComputeCovarianceAndRank(const AdjustmentProblem::Impl& impl, const ReducedNormals& normals,
-                              const AdjustmentOptions& options, AdjustmentResult* result) {
-  // Every non-point parameter, in block order (index == global column).
+// Every non-point parameter into the result, in block order (index == global
+// column); returns the columns of the adjusted (not fixed) ones.
+std::vector<int> CollectParameters(const AdjustmentProblem::Impl& impl, AdjustmentResult* result) {
   std::vector<int> free_cols;
   for (const AdjustmentBlock& b : impl.blocks) {
     if (b.kind == BlockKind::kPoint) continue;
@@ -96,57 +94,72 @@ void ComputeCovarianceAndRank(const AdjustmentProblem::Impl& impl, const Reduced
       result->parameters.push_back(std::move(p));
     }
   }
-  const int n = static_cast<int>(free_cols.size());
-  RankReport& rank = result->rank;
-  rank.num_parameters = n;
-  result->covariance_row.assign(result->parameters.size(), -1);
-  if (n == 0) return;
+  return free_cols;
+}
 
+// The reduced matrix scaled to unit diagonal, S = D^-1/2 N D^-1/2, and its eigen-decomposition.
+struct ScaledDecomposition {
+  Eigen::VectorXd inv_sqrt_d;  // D^-1/2 (1 for untouched parameters)
+  Eigen::VectorXd lambda;      // ascending
+  Eigen::MatrixXd vectors;
+  double lambda_max = 0.0;
+  std::vector<int> null_cols, weak_cols;
+};
+
+ScaledDecomposition Decompose(const ReducedNormals& normals, const std::vector<int>& free_cols,
+                              const std::vector<ParameterWords>& words, const AdjustmentOptions& options,
+                              RankReport* rank) {
+  const int n = static_cast<int>(free_cols.size());
   Eigen::MatrixXd N(n, n);
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) N(i, j) = normals.n_gg(free_cols[i], free_cols[j]);
   }
-  const std::vector<ParameterWords> words = WordsOf(impl, free_cols);
-  Eigen::VectorXd inv_sqrt_d(n);
+  ScaledDecomposition d;
+  d.inv_sqrt_d.resize(n);
   const double largest_diagonal = N.diagonal().maxCoeff();
-  rank.structural_rank = n;
+  rank->structural_rank = n;
   for (int i = 0; i < n; ++i) {
     if (!(N(i, i) > 1e-300 * std::max(1.0, largest_diagonal))) {
-      rank.untouched.push_back(words[i].single);
-      --rank.structural_rank;
-      inv_sqrt_d[i] = 1.0;
+      rank->untouched.push_back(words[i].single);
+      --rank->structural_rank;
+      d.inv_sqrt_d[i] = 1.0;
     } else {
-      inv_sqrt_d[i] = 1.0 / std::sqrt(N(i, i));
+      d.inv_sqrt_d[i] = 1.0 / std::sqrt(N(i, i));
     }
   }
-  const Eigen::MatrixXd S = inv_sqrt_d.asDiagonal() * N * inv_sqrt_d.asDiagonal();
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(S);
-  const Eigen::VectorXd& lambda = eigen.eigenvalues();  // ascending
-  const Eigen::MatrixXd& V = eigen.eigenvectors();
-  const double lambda_max = std::max(lambda[n - 1], 1e-300);
-  std::vector<int> null_cols, weak_cols;
-  double smallest_kept = lambda_max;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(d.inv_sqrt_d.asDiagonal() * N * d.inv_sqrt_d.asDiagonal());
+  d.lambda = eigen.eigenvalues();
+  d.vectors = eigen.eigenvectors();
+  d.lambda_max = std::max(d.lambda[n - 1], 1e-300);
+  double smallest_kept = d.lambda_max;
   for (int i = 0; i < n; ++i) {
-    if (lambda[i] <= options.rank_tolerance * lambda_max) {
-      null_cols.push_back(i);
+    if (d.lambda[i] <= options.rank_tolerance * d.lambda_max) {
+      d.null_cols.push_back(i);
     } else {
-      smallest_kept = std::min(smallest_kept, lambda[i]);
-      if (lambda[i] <= options.weak_tolerance * lambda_max) weak_cols.push_back(i);
+      smallest_kept = std::min(smallest_kept, d.lambda[i]);
+      if (d.lambda[i] <= options.weak_tolerance * d.lambda_max) d.weak_cols.push_back(i);
     }
   }
-  rank.numerical_rank = n - static_cast<int>(null_cols.size());
+  rank->numerical_rank = n - static_cast<int>(d.null_cols.size());
+  rank->condition_number = d.lambda_max / smallest_kept;
+  return d;
+}
 
-  rank.condition_number = lambda_max / smallest_kept;
-
-  // Split the null space into the datum's gauge (a free network's choice) and true defects.
-  Eigen::MatrixXd V0(n, null_cols.size());
-  for (size_t k = 0; k < null_cols.size(); ++k) V0.col(k) = V.col(null_cols[k]);
-  Eigen::MatrixXd G;  // gauge rows of the free parameters, in the scaled space
+// Splits the null space into the datum's gauge (a free network's choice) and
+// true defects, names every defect and weak direction in the rank report, and
+// returns the defects (columns, scaled space).
+Eigen::MatrixXd NameNullSpace(const AdjustmentProblem::Impl& impl, const std::vector<int>& free_cols,
+                              const std::vector<ParameterWords>& words, const ScaledDecomposition& d,
+                              RankReport* rank, bool* apply_inner_constraints) {
+  const int n = static_cast<int>(free_cols.size());
+  Eigen::MatrixXd V0(n, d.null_cols.size());
+  for (size_t k = 0; k < d.null_cols.size(); ++k) V0.col(k) = d.vectors.col(d.null_cols[k]);
+  Eigen::MatrixXd G;            // gauge rows of the free parameters, in the scaled space
   Eigen::MatrixXd gauge_basis;  // orthonormal basis of span(G)
   Eigen::MatrixXd defects = V0;
   if (impl.gauge.size() > 0) {
     G.resize(n, impl.gauge.cols());
-    for (int i = 0; i < n; ++i) G.row(i) = impl.gauge.row(free_cols[i]) / inv_sqrt_d[i];
+    for (int i = 0; i < n; ++i) G.row(i) = impl.gauge.row(free_cols[i]) / d.inv_sqrt_d[i];
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(G);
     qr.setThreshold(1e-9);
     gauge_basis = Eigen::MatrixXd(qr.householderQ()).leftCols(qr.rank());
@@ -157,14 +170,14 @@ void ComputeCovarianceAndRank(const AdjustmentProblem::Impl& impl, const Reduced
     int count = 0;
     for (int k = 0; k < svd.singularValues().size(); ++k) count += svd.singularValues()[k] > 0.5 ? 1 : 0;
     defects = svd.matrixU().leftCols(count);
-    rank.datum_defect = static_cast<int>(V0.cols()) - count;
+    rank->datum_defect = static_cast<int>(V0.cols()) - count;
   }
   // The minimum-trace S-transformation holds only where the whole gauge is
   // free; priors that fix part of it (a-priori stations) leave the datum to them.
-  const bool apply_inner_constraints = impl.gauge_is_datum && rank.datum_defect == gauge_basis.cols();
+  *apply_inner_constraints = impl.gauge_is_datum && rank->datum_defect == gauge_basis.cols();
   for (int k = 0; k < defects.cols(); ++k) {
-    NullDirection d = Describe(defects.col(k), words);
-    d.exact = true;
+    NullDirection direction = Describe(defects.col(k), words);
+    direction.exact = true;
     if (gauge_basis.cols() > 0 && (gauge_basis.transpose() * defects.col(k)).norm() > 0.9) {
       // A datum defect: name the network motion it is.
       const Eigen::VectorXd a = G.colPivHouseholderQr().solve(defects.col(k));
@@ -172,45 +185,66 @@ void ComputeCovarianceAndRank(const AdjustmentProblem::Impl& impl, const Reduced
       for (int j = 1; j < a.size(); ++j) {
         if (std::abs(a[j]) * G.col(j).norm() > std::abs(a[best]) * G.col(best).norm()) best = j;
       }
-      d.words = "the datum: " + impl.gauge_names[best] + " (" + d.words + ")";
+      direction.words = "the datum: " + impl.gauge_names[best] + " (" + direction.words + ")";
     }
-    rank.directions.push_back(std::move(d));
+    rank->directions.push_back(std::move(direction));
   }
-  for (int col : weak_cols) {
-    NullDirection d = Describe(V.col(col), words);
-    d.relative_eigenvalue = lambda[col] / lambda_max;
-    rank.directions.push_back(std::move(d));
+  for (int col : d.weak_cols) {
+    NullDirection direction = Describe(d.vectors.col(col), words);
+    direction.relative_eigenvalue = d.lambda[col] / d.lambda_max;
+    rank->directions.push_back(std::move(direction));
   }
+  return defects;
+}
 
-  // Pseudo-inverse over the non-null space, back to parameter units.
+// The pseudo-inverse over the non-null space in parameter units, moved to
+// minimum trace over the gauge's trace rows for a free network:
+// P Q P^T with P = I - G (G^T W G)^-1 G^T W.
+Eigen::MatrixXd Cofactor(const AdjustmentProblem::Impl& impl, const std::vector<int>& free_cols,
+                         const ScaledDecomposition& d, const AdjustmentOptions& options, bool apply_inner_constraints) {
+  const int n = static_cast<int>(free_cols.size());
   Eigen::VectorXd inverse_lambda = Eigen::VectorXd::Zero(n);
   for (int i = 0; i < n; ++i) {
-    if (lambda[i] > options.rank_tolerance * lambda_max) inverse_lambda[i] = 1.0 / lambda[i];
+    if (d.lambda[i] > options.rank_tolerance * d.lambda_max) inverse_lambda[i] = 1.0 / d.lambda[i];
   }
-  Eigen::MatrixXd Q = inv_sqrt_d.asDiagonal() * (V * inverse_lambda.asDiagonal() * V.transpose()) *
-                      inv_sqrt_d.asDiagonal();
-  if (apply_inner_constraints) {
-    // S-transformation to minimum trace over the flagged rows: P = I - G (G^T W G)^-1 G^T W.
-    Eigen::MatrixXd Gp(n, impl.gauge.cols());
-    Eigen::VectorXd w(n);
-    for (int i = 0; i < n; ++i) {
-      Gp.row(i) = impl.gauge.row(free_cols[i]);
-      w[i] = impl.gauge_trace_rows[free_cols[i]] ? 1.0 : 0.0;
-    }
-    const Eigen::MatrixXd GtW = Gp.transpose() * w.asDiagonal();
-    const Eigen::MatrixXd P =
-        Eigen::MatrixXd::Identity(n, n) - Gp * (GtW * Gp).completeOrthogonalDecomposition().solve(GtW);
-    Q = P * Q * P.transpose();
-  }
-  // Parameters with a share of a true defect direction cannot be estimated.
-  std::vector<bool> estimable(n, true);
+  Eigen::MatrixXd Q = d.inv_sqrt_d.asDiagonal() * (d.vectors * inverse_lambda.asDiagonal() * d.vectors.transpose()) *
+                      d.inv_sqrt_d.asDiagonal();
+  if (!apply_inner_constraints) return Q;
+  Eigen::MatrixXd G(n, impl.gauge.cols());
+  Eigen::VectorXd w(n);
   for (int i = 0; i < n; ++i) {
-    if (defects.cols() > 0 && defects.row(i).norm() > 1e-3) estimable[i] = false;
+    G.row(i) = impl.gauge.row(free_cols[i]);
+    w[i] = impl.gauge_trace_rows[free_cols[i]] ? 1.0 : 0.0;
   }
+  const Eigen::MatrixXd GtW = G.transpose() * w.asDiagonal();
+  const Eigen::MatrixXd P =
+      Eigen::MatrixXd::Identity(n, n) - G * (GtW * G).completeOrthogonalDecomposition().solve(GtW);
+  return P * Q * P.transpose();
+}
+
+}  // namespace
+
+void ComputeCovarianceAndRank(const AdjustmentProblem::Impl& impl, const ReducedNormals& normals,
+                              const AdjustmentOptions& options, AdjustmentResult* result) {
+  const std::vector<int> free_cols = CollectParameters(impl, result);
+  const int n = static_cast<int>(free_cols.size());
+  RankReport& rank = result->rank;
+  rank.num_parameters = n;
+  result->covariance_row.assign(result->parameters.size(), -1);
+  if (n == 0) return;
+  const std::vector<ParameterWords> words = WordsOf(impl, free_cols);
+  const ScaledDecomposition d = Decompose(normals, free_cols, words, options, &rank);
+  bool apply_inner_constraints = false;
+  const Eigen::MatrixXd defects = NameNullSpace(impl, free_cols, words, d, &rank, &apply_inner_constraints);
+  const Eigen::MatrixXd Q = Cofactor(impl, free_cols, d, options, apply_inner_constraints);
+  // Parameters with a share of a true defect direction cannot be estimated.
   std::vector<int> rows;
   for (int i = 0; i < n; ++i) {
-    if (estimable[i]) rows.push_back(i);
-    else result->parameters[free_cols[i]].status = EstimateStatus::kNotEstimable;
+    if (defects.cols() > 0 && defects.row(i).norm() > 1e-3) {
+      result->parameters[free_cols[i]].status = EstimateStatus::kNotEstimable;
+    } else {
+      rows.push_back(i);
+    }
   }
   result->cofactor.resize(rows.size(), rows.size());
   for (size_t i = 0; i < rows.size(); ++i) {

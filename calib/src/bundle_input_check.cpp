@@ -145,12 +145,23 @@ bool BundleInputCheckOptions::Check(std::string* why) const {
   return true;
 }
 
-CheckedBundleInput CheckBundleInput(const BundleInput& input, const BundleInputCheckOptions& options) {
-  std::string why;
-  if (!options.Check(&why)) Fail(why);
-  CheckedBundleInput out;
-  std::vector<BundleWarning>& warnings = out.warnings;
+namespace {
 
+// What the checks work on: the frames (listed or made), indexes, and which
+// observations and frames are still in.
+struct CheckContext {
+  explicit CheckContext(const BundleInput& in) : input(in) {}
+  const BundleInput& input;
+  std::vector<FrameSetup> frames;
+  std::map<std::string, size_t> frame_index;
+  std::map<std::string, const GroundPoint*> ground;
+  std::set<std::string> observed_ids, distance_named;
+  std::vector<bool> active, frame_kept;
+};
+
+// Every error of the input (throws), and the frames made when none are listed.
+void CheckErrors(CheckContext* c) {
+  const BundleInput& input = c->input;
   // --- Errors --------------------------------------------------------------
   CheckCameras(input.cameras);
   std::set<std::string> camera_set;
@@ -162,7 +173,8 @@ CheckedBundleInput CheckBundleInput(const BundleInput& input, const BundleInputC
   if (input.observations.empty()) Fail("no image observations");
   for (const ImageObservation& o : input.observations) CheckObservation(o);
 
-  std::vector<FrameSetup> frames = input.frames;
+  std::vector<FrameSetup>& frames = c->frames;
+  frames = input.frames;
   if (frames.empty()) {
     // Frames not listed: one per observed frame id, when the camera is unambiguous.
     if (input.cameras.size() != 1) {
@@ -181,7 +193,7 @@ CheckedBundleInput CheckBundleInput(const BundleInput& input, const BundleInputC
       }
     }
   }
-  std::map<std::string, size_t> frame_index;
+  std::map<std::string, size_t>& frame_index = c->frame_index;
   for (size_t i = 0; i < frames.size(); ++i) {
     if (frames[i].id.empty()) Fail("a frame has an empty id");
     if (!frame_index.emplace(frames[i].id, i).second) Fail("frame " + Quoted(frames[i].id) + " is listed twice");
@@ -201,7 +213,7 @@ CheckedBundleInput CheckBundleInput(const BundleInput& input, const BundleInputC
       }
     }
   }
-  std::map<std::string, const GroundPoint*> ground;
+  std::map<std::string, const GroundPoint*>& ground = c->ground;
   for (const GroundPoint& p : input.ground_points) {
     CheckGroundPoint(p);
     if (!ground.emplace(p.id, &p).second) {
@@ -209,9 +221,9 @@ CheckedBundleInput CheckBundleInput(const BundleInput& input, const BundleInputC
                            (ground[p.id]->origin.empty() ? std::string() : " (also at " + ground[p.id]->origin + ")"));
     }
   }
-  std::set<std::string> observed_ids;
+  std::set<std::string>& observed_ids = c->observed_ids;
   for (const ImageObservation& o : input.observations) observed_ids.insert(o.point_id);
-  std::set<std::string> distance_named;
+  std::set<std::string>& distance_named = c->distance_named;
   for (const DistanceObservation& d : input.distances) {
     const std::string what = DistanceName(d) + ": ";
     if (d.from.empty() || d.to.empty()) Fail(what + "an end has an empty id");
@@ -227,12 +239,24 @@ CheckedBundleInput CheckBundleInput(const BundleInput& input, const BundleInputC
     }
   }
 
+}
+
+// Leaves out points seen once and thin frames, repeated until nothing changes.
+void LeaveOutUntilStable(CheckContext* c, const BundleInputCheckOptions& options, std::vector<BundleWarning>* out_warnings) {
+  const BundleInput& input = c->input;
+  std::vector<BundleWarning>& warnings = *out_warnings;
+  const std::vector<FrameSetup>& frames = c->frames;
+  std::map<std::string, size_t>& frame_index = c->frame_index;
+  const std::map<std::string, const GroundPoint*>& ground = c->ground;
+  const std::set<std::string>& distance_named = c->distance_named;
   // --- Cleaning, until stable ---------------------------------------------
   // Leaving things out only lowers the counts, so the result does not depend
   // on the order of the steps.
   const size_t n_obs = input.observations.size();
-  std::vector<bool> active(n_obs, true);
-  std::vector<bool> frame_kept(frames.size(), true);
+  std::vector<bool>& active = c->active;
+  std::vector<bool>& frame_kept = c->frame_kept;
+  active.assign(n_obs, true);
+  frame_kept.assign(frames.size(), true);
   std::map<std::string, int> initial_frames_of_point, initial_points_of_frame;
   for (const ImageObservation& o : input.observations) {
     ++initial_frames_of_point[o.point_id];
@@ -300,6 +324,18 @@ CheckedBundleInput CheckBundleInput(const BundleInput& input, const BundleInputC
     }
   }
 
+}
+
+// The input that is left, with warnings for the ground points, distances and
+// cameras that no longer take part.
+void CollectKept(const CheckContext& c, CheckedBundleInput* out) {
+  const BundleInput& input = c.input;
+  std::vector<BundleWarning>& warnings = out->warnings;
+  const std::vector<FrameSetup>& frames = c.frames;
+  const std::set<std::string>& observed_ids = c.observed_ids;
+  const std::vector<bool>& active = c.active;
+  const std::vector<bool>& frame_kept = c.frame_kept;
+  const size_t n_obs = input.observations.size();
   // --- What is left ---------------------------------------------------------
   std::set<std::string> kept_frames, kept_points;
   for (size_t f = 0; f < frames.size(); ++f) {
@@ -341,7 +377,7 @@ CheckedBundleInput CheckBundleInput(const BundleInput& input, const BundleInputC
       if (!in_network(end) && !kept_unobserved.count(end)) missing.push_back(end);
     }
     if (missing.empty()) {
-      out.input.distances.push_back(d);
+      out->input.distances.push_back(d);
     } else {
       warnings.push_back({DistanceName(d), List(missing) + (missing.size() == 1 ? " is" : " are") +
                                                " not in the adjustment (left out or never observed); the distance "
@@ -352,26 +388,38 @@ CheckedBundleInput CheckBundleInput(const BundleInput& input, const BundleInputC
   for (size_t f = 0; f < frames.size(); ++f) {
     if (frame_kept[f]) {
       used_cameras.insert(frames[f].camera);
-      out.input.frames.push_back(frames[f]);
+      out->input.frames.push_back(frames[f]);
     }
   }
   for (const CameraSetup& camera : input.cameras) {
     if (used_cameras.count(camera.name)) {
-      out.input.cameras.push_back(camera);
+      out->input.cameras.push_back(camera);
     } else {
       warnings.push_back({"camera " + camera.name, "no kept frame uses it; left out"});
     }
   }
   for (size_t i = 0; i < n_obs; ++i) {
-    if (active[i]) out.input.observations.push_back(input.observations[i]);
+    if (active[i]) out->input.observations.push_back(input.observations[i]);
   }
   for (const GroundPoint& p : input.ground_points) {
-    if (kept_points.count(p.id) || kept_unobserved.count(p.id)) out.input.ground_points.push_back(p);
+    if (kept_points.count(p.id) || kept_unobserved.count(p.id)) out->input.ground_points.push_back(p);
   }
-  if (out.input.observations.empty()) {
+  if (out->input.observations.empty()) {
     Fail("no observation is left after the checks (" + std::to_string(warnings.size()) +
          " warning(s); the first: " + warnings.front().item + ": " + warnings.front().reason + ")");
   }
+}
+
+}  // namespace
+
+CheckedBundleInput CheckBundleInput(const BundleInput& input, const BundleInputCheckOptions& options) {
+  std::string why;
+  if (!options.Check(&why)) Fail(why);
+  CheckContext context(input);
+  CheckErrors(&context);
+  CheckedBundleInput out;
+  LeaveOutUntilStable(&context, options, &out.warnings);
+  CollectKept(context, &out);
   return out;
 }
 

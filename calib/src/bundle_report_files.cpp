@@ -29,6 +29,16 @@ bool BundleReportOptions::Check(std::string* why) const {
   return true;
 }
 
+std::vector<int> AdjustedCameraParameters(const BundleCameraResult& camera, std::vector<std::string>* names) {
+  std::vector<int> adjusted;
+  for (int i = 0; i < kBundleCameraParams; ++i) {
+    if (!camera.sigmas[i]) continue;
+    adjusted.push_back(camera.parameter_index[i]);
+    names->push_back(kBundleCameraParamNames[i]);
+  }
+  return adjusted;
+}
+
 std::vector<const ObservationResidual*> WorstObservations(const BundleResult& result, int count) {
   std::vector<const ObservationResidual*> all;
   for (const ObservationResidual& r : result.adjustment.residuals) {

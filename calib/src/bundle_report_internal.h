@@ -7,6 +7,10 @@
 
 namespace platemeter {
 
+// The camera's adjusted parameters (those with a sigma): their indices in
+// result.adjustment.parameters, and their names in `names`.
+std::vector<int> AdjustedCameraParameters(const BundleCameraResult& camera, std::vector<std::string>* names);
+
 // The observations with the largest normalized residuals (rejected ones first), at most `count`.
 std::vector<const ObservationResidual*> WorstObservations(const BundleResult& result, int count);
 

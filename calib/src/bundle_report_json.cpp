@@ -58,14 +58,8 @@ ordered_json CameraJson(const BundleResult& result, size_t c) {
                                               {"status", EstimateStatusName(camera.status[i])}};
   }
   j["parameters"] = parameters;
-  std::vector<int> adjusted;
   std::vector<std::string> names;
-  for (int i = 0; i < kBundleCameraParams; ++i) {
-    if (camera.sigmas[i]) {
-      adjusted.push_back(camera.parameter_index[i]);
-      names.push_back(kBundleCameraParamNames[i]);
-    }
-  }
+  const std::vector<int> adjusted = AdjustedCameraParameters(camera, &names);
   const Eigen::MatrixXd r = a.Correlation(adjusted);
   j["correlation"] = {{"parameters", names}, {"matrix", ordered_json::array()}};
   for (int i = 0; i < r.rows(); ++i) {

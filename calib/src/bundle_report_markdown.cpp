@@ -49,14 +49,8 @@ void StatisticsSection(const BundleResult& result, std::string* out) {
 
 void CorrelationSection(const BundleResult& result, const BundleCameraResult& camera, std::string* out) {
   const AdjustmentResult& a = result.adjustment;
-  std::vector<int> adjusted;
   std::vector<std::string> names;
-  for (int i = 0; i < kBundleCameraParams; ++i) {
-    if (camera.sigmas[i]) {
-      adjusted.push_back(camera.parameter_index[i]);
-      names.push_back(kBundleCameraParamNames[i]);
-    }
-  }
+  const std::vector<int> adjusted = AdjustedCameraParameters(camera, &names);
   if (adjusted.empty()) return;
   *out += fmt::format("\n## Correlations of the inner cone, camera {}\n\n|", camera.name);
   for (const std::string& n : names) *out += " " + n + " |";

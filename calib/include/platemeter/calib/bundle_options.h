@@ -26,7 +26,7 @@ struct BundleOptions {
   // rejected; 0 = from false_rejection_rate (adjustment.h).
   double rejection_threshold = 0.0;   // sigma units
   double false_rejection_rate = 0.01; // -; chance that any good observation is rejected (threshold 0)
-  int max_iterations = 100;          // Levenberg-Marquardt iterations per pass
+  int max_iterations = 100;          // trust-region (Powell dogleg) iterations per pass
   // Relative change of v'Pv that ends a pass: at v'Pv = 4e5 (a block of
   // 400 000 observations) a step changing it by 1e-10 of itself moves the
   // solution by under 0.01 sigma in any direction.

@@ -662,6 +662,104 @@ ToolRun TimedRun(const std::vector<std::string>& args, const fs::path& log, cons
   return run;
 }
 
+// COLMAP's bundle_adjuster on the block written as a COLMAP model: its
+// defaults, then bare Ceres' tolerances; one row each.
+void RunColmap(const Args& args, const fs::path& work, const sim::SimulatedBlock& block,
+               const sim::PixelMapping& pixels, std::vector<Row>* rows_out) {
+  std::vector<Row>& rows = *rows_out;
+  const sim::BundleTruth& truth = block.truth;
+  const double pixel_mm = args.pixel_um * 1e-3;
+  const fs::path text = work / "colmap-input-txt", bin = work / "colmap-input";
+  for (const fs::path& d : {text, bin}) fs::remove_all(d), fs::create_directories(d);
+  WriteColmapModel(block, pixels, text);
+  const std::string colmap = "/usr/bin/colmap";
+  bool converted = false;
+  if (fs::exists(colmap)) {
+    converted = RunProcess({colmap, "model_converter", "--input_path", text.string(), "--output_path", bin.string(),
+                            "--output_type", "BIN"},
+                           (work / "colmap-convert.log").string())
+                    .ok;
+  }
+  // COLMAP's defaults (all tolerances 0: it iterates until the steps vanish),
+  // then the tolerances bare Ceres uses.
+  const std::vector<std::pair<std::string, std::vector<std::string>>> variants = {
+      {"COLMAP bundle_adjuster (default tolerances)", {}},
+      {"COLMAP bundle_adjuster (Ceres' tolerances)",
+       {"--BundleAdjustment.function_tolerance", "1e-10", "--BundleAdjustment.gradient_tolerance", "1e-12",
+        "--BundleAdjustment.parameter_tolerance", "1e-10"}}};
+  for (std::size_t v = 0; v < variants.size(); ++v) {
+    Row row;
+    row.method = variants[v].first;
+    row.label = v == 0 ? "COLMAP (defaults)" : "COLMAP (Ceres' tol.)";
+    const std::string tag = "colmap-" + std::to_string(v + 1);
+    const fs::path out = work / (tag + "-output"), out_text = work / (tag + "-output-txt");
+    for (const fs::path& d : {out, out_text}) fs::remove_all(d), fs::create_directories(d);
+    if (!fs::exists(colmap)) {
+      row.note = "not run: /usr/bin/colmap missing (apt-get install -y --no-install-recommends colmap)";
+      rows.push_back(row);
+      continue;
+    }
+    std::printf("running %s ...\n", row.method.c_str());
+    std::vector<std::string> cmd = {colmap, "bundle_adjuster", "--input_path", bin.string(), "--output_path",
+                                    out.string(), "--BundleAdjustment.refine_principal_point", "1"};
+    cmd.insert(cmd.end(), variants[v].second.begin(), variants[v].second.end());
+    const ToolRun run = TimedRun(cmd, work / (tag + ".log"), work / (tag + ".time"));
+    const ToolRun back = RunProcess({colmap, "model_converter", "--input_path", out.string(), "--output_path",
+                                     out_text.string(), "--output_type", "TXT"},
+                                    (work / (tag + "-convert-back.log")).string());
+    ColmapCamera cam;
+    double rms_px = 0;
+    long n = 0;
+    if (!converted || !run.ok || !back.ok || !ReadColmapResult(out_text, &cam, &rms_px, &n)) {
+      row.note = "failed, see " + (work / (tag + ".log")).string();
+      rows.push_back(row);
+      continue;
+    }
+    row.ran = true;
+    row.wall_s = run.seconds;
+    row.rss_mb = run.peak_rss_mb;
+    row.rms_px = rms_px;
+    row.rms_um = rms_px * args.pixel_um;
+    // Inner cone in plate terms: c = f * pixel, xp = (cx - W/2) * pixel; the
+    // distortion converted to Brown's correction form to first order (k2 to second).
+    const double c = 0.5 * (cam.fx + cam.fy) * pixel_mm;
+    row.camera = {c,
+                  (cam.cx - 0.5 * cam.width) * pixel_mm,
+                  (cam.cy - 0.5 * cam.height) * pixel_mm,
+                  -cam.k1 / (c * c),
+                  (3.0 * cam.k1 * cam.k1 - cam.k2) / std::pow(c, 4),
+                  0.0,
+                  -cam.p2 / c,
+                  -cam.p1 / c,
+                  -(cam.fx - cam.fy) / (cam.fx + cam.fy),  // ~ x-scale affinity b1
+                  0.0};
+    row.has_camera = true;
+    row.field = CompareField(truth.camera, [&](double nx, double ny) {
+      // COLMAP's projection of the same direction, in plate mm.
+      const double r2 = nx * nx + ny * ny, radial = 1.0 + r2 * (cam.k1 + r2 * cam.k2);
+      const double xd = nx * radial + 2.0 * cam.p1 * nx * ny + cam.p2 * (r2 + 2.0 * nx * nx);
+      const double yd = ny * radial + cam.p1 * (r2 + 2.0 * ny * ny) + 2.0 * cam.p2 * nx * ny;
+      return Eigen::Vector2d((cam.fx * xd + cam.cx - 0.5 * cam.width) * pixel_mm,
+                             (cam.fy * yd + cam.cy - 0.5 * cam.height) * pixel_mm);
+    });
+    char note[300];
+    std::snprintf(note, sizeof(note),
+                  "OPENCV fx %.2f fy %.2f cx %.2f cy %.2f k1 %.4g k2 %.4g p1 %.4g p2 %.4g (px); %ld observations",
+                  cam.fx, cam.fy, cam.cx, cam.cy, cam.k1, cam.k2, cam.p1, cam.p2, n);
+    row.note = note;
+    // Iterations, time and termination from COLMAP's report.
+    std::ifstream log(work / (tag + ".log"));
+    std::string line;
+    while (std::getline(log, line)) {
+      for (const char* key : {"Iterations :", "Time :", "Termination :"}) {
+        const auto at = line.find(key);
+        if (at != std::string::npos) row.note += "; " + line.substr(line.find_first_not_of(' '));
+      }
+    }
+    rows.push_back(row);
+  }
+}
+
 // The table of every method, then the inner cone against the truth and each
 // method's details, the covariance costs and the speed ratios.
 void PrintResults(const std::vector<Row>& rows, const sim::BundleTruth& truth, const Result& ceres_result,
@@ -855,97 +953,7 @@ int main(int argc, char** argv) {
   const Result ceres_result = run_child("ceres", "bare Ceres");
   const Result engine_result = run_child("platemeter", "platemeter engine");
 
-  if (args.colmap) {
-    const fs::path text = work / "colmap-input-txt", bin = work / "colmap-input";
-    for (const fs::path& d : {text, bin}) fs::remove_all(d), fs::create_directories(d);
-    WriteColmapModel(block, pixels, text);
-    const std::string colmap = "/usr/bin/colmap";
-    bool converted = false;
-    if (fs::exists(colmap)) {
-      converted = RunProcess({colmap, "model_converter", "--input_path", text.string(), "--output_path", bin.string(),
-                              "--output_type", "BIN"},
-                             (work / "colmap-convert.log").string())
-                      .ok;
-    }
-    // COLMAP's defaults (all tolerances 0: it iterates until the steps vanish),
-    // then the tolerances bare Ceres uses.
-    const std::vector<std::pair<std::string, std::vector<std::string>>> variants = {
-        {"COLMAP bundle_adjuster (default tolerances)", {}},
-        {"COLMAP bundle_adjuster (Ceres' tolerances)",
-         {"--BundleAdjustment.function_tolerance", "1e-10", "--BundleAdjustment.gradient_tolerance", "1e-12",
-          "--BundleAdjustment.parameter_tolerance", "1e-10"}}};
-    for (std::size_t v = 0; v < variants.size(); ++v) {
-      Row row;
-      row.method = variants[v].first;
-      row.label = v == 0 ? "COLMAP (defaults)" : "COLMAP (Ceres' tol.)";
-      const std::string tag = "colmap-" + std::to_string(v + 1);
-      const fs::path out = work / (tag + "-output"), out_text = work / (tag + "-output-txt");
-      for (const fs::path& d : {out, out_text}) fs::remove_all(d), fs::create_directories(d);
-      if (!fs::exists(colmap)) {
-        row.note = "not run: /usr/bin/colmap missing (apt-get install -y --no-install-recommends colmap)";
-        rows.push_back(row);
-        continue;
-      }
-      std::printf("running %s ...\n", row.method.c_str());
-      std::vector<std::string> cmd = {colmap, "bundle_adjuster", "--input_path", bin.string(), "--output_path",
-                                      out.string(), "--BundleAdjustment.refine_principal_point", "1"};
-      cmd.insert(cmd.end(), variants[v].second.begin(), variants[v].second.end());
-      const ToolRun run = TimedRun(cmd, work / (tag + ".log"), work / (tag + ".time"));
-      const ToolRun back = RunProcess({colmap, "model_converter", "--input_path", out.string(), "--output_path",
-                                       out_text.string(), "--output_type", "TXT"},
-                                      (work / (tag + "-convert-back.log")).string());
-      ColmapCamera cam;
-      double rms_px = 0;
-      long n = 0;
-      if (!converted || !run.ok || !back.ok || !ReadColmapResult(out_text, &cam, &rms_px, &n)) {
-        row.note = "failed, see " + (work / (tag + ".log")).string();
-        rows.push_back(row);
-        continue;
-      }
-      row.ran = true;
-      row.wall_s = run.seconds;
-      row.rss_mb = run.peak_rss_mb;
-      row.rms_px = rms_px;
-      row.rms_um = rms_px * args.pixel_um;
-      // Inner cone in plate terms: c = f * pixel, xp = (cx - W/2) * pixel; the
-      // distortion converted to Brown's correction form to first order (k2 to second).
-      const double c = 0.5 * (cam.fx + cam.fy) * pixel_mm;
-      row.camera = {c,
-                    (cam.cx - 0.5 * cam.width) * pixel_mm,
-                    (cam.cy - 0.5 * cam.height) * pixel_mm,
-                    -cam.k1 / (c * c),
-                    (3.0 * cam.k1 * cam.k1 - cam.k2) / std::pow(c, 4),
-                    0.0,
-                    -cam.p2 / c,
-                    -cam.p1 / c,
-                    -(cam.fx - cam.fy) / (cam.fx + cam.fy),  // ~ x-scale affinity b1
-                    0.0};
-      row.has_camera = true;
-      row.field = CompareField(truth.camera, [&](double nx, double ny) {
-        // COLMAP's projection of the same direction, in plate mm.
-        const double r2 = nx * nx + ny * ny, radial = 1.0 + r2 * (cam.k1 + r2 * cam.k2);
-        const double xd = nx * radial + 2.0 * cam.p1 * nx * ny + cam.p2 * (r2 + 2.0 * nx * nx);
-        const double yd = ny * radial + cam.p1 * (r2 + 2.0 * ny * ny) + 2.0 * cam.p2 * nx * ny;
-        return Eigen::Vector2d((cam.fx * xd + cam.cx - 0.5 * cam.width) * pixel_mm,
-                               (cam.fy * yd + cam.cy - 0.5 * cam.height) * pixel_mm);
-      });
-      char note[300];
-      std::snprintf(note, sizeof(note),
-                    "OPENCV fx %.2f fy %.2f cx %.2f cy %.2f k1 %.4g k2 %.4g p1 %.4g p2 %.4g (px); %ld observations",
-                    cam.fx, cam.fy, cam.cx, cam.cy, cam.k1, cam.k2, cam.p1, cam.p2, n);
-      row.note = note;
-      // Iterations, time and termination from COLMAP's report.
-      std::ifstream log(work / (tag + ".log"));
-      std::string line;
-      while (std::getline(log, line)) {
-        for (const char* key : {"Iterations :", "Time :", "Termination :"}) {
-          const auto at = line.find(key);
-          if (at != std::string::npos) row.note += "; " + line.substr(line.find_first_not_of(' '));
-        }
-      }
-      rows.push_back(row);
-    }
-  }
+  if (args.colmap) RunColmap(args, work, block, pixels, &rows);
 
   PrintResults(rows, truth, ceres_result, engine_result);
   std::printf("work files and logs: %s\n", work.c_str());

@@ -42,12 +42,8 @@ Eigen::VectorXd Whitened(const AdjustmentProblem::Impl& impl, const AdjustmentEq
   return r;
 }
 
-struct CeresRun {
-  ceres::Solver::Summary summary;
-};
-
 void ConfigureSolver(const AdjustmentProblem::Impl& impl, const AdjustmentOptions& options,
-                     ceres::Problem* problem, ceres::Solver::Options* solver) {
+                     ceres::Solver::Options* solver) {
   solver->max_num_iterations = options.max_iterations;
   solver->function_tolerance = options.function_tolerance;
   solver->gradient_tolerance = 1e-14;
@@ -76,7 +72,6 @@ void ConfigureSolver(const AdjustmentProblem::Impl& impl, const AdjustmentOption
   } else {
     solver->linear_solver_type = free_global <= 1000 ? ceres::DENSE_QR : ceres::SPARSE_NORMAL_CHOLESKY;
   }
-  (void)problem;
 }
 
 // The rejection level: given, or where a Gaussian residual component is
@@ -130,7 +125,7 @@ AdjustmentResult AdjustmentProblem::Solve(const AdjustmentOptions& options, cons
   }
 
   ceres::Solver::Options solver;
-  ConfigureSolver(impl, options, &problem, &solver);
+  ConfigureSolver(impl, options, &solver);
   int iterations = 0;
   if (robust) {
     ProgressCallback callback(progress, "robust pass", options.max_iterations);

@@ -87,6 +87,13 @@ BundleResult RunBundleAdjustment(const BundleInput& input, const BundleOptions& 
       bundle_internal::BuildBundleProblem(input, approximations, options.datum, &problem);
   result.datum = built.datum;
   result.datum_words = built.datum_words;
+  const bool arbitrary = std::count(approximations.method.begin(), approximations.method.end(),
+                                    "relative orientation") > 0 &&
+                         input.ground_points.empty() && input.distances.empty();
+  if (arbitrary) {
+    result.datum_words += "; object coordinates in the frame of the relative orientation (the first pair's "
+                          "baseline is 1 unit): give a distance or control points for metres";
+  }
   result.adjustment = problem.Solve(EngineOptions(options), progress);
   const AdjustmentResult& a = result.adjustment;
 

@@ -397,7 +397,7 @@ EngineRun RunPlatemeterEngine(const BundleInput& block_input, int threads) {
   const double baseline_m = (*input.frames[1].position_m - *input.frames[0].position_m).norm();
   input.distances.push_back({input.frames[0].id, input.frames[1].id, baseline_m, 0.0});
   BundleOptions options;
-  options.num_threads = threads;
+  options.adjustment.num_threads = threads;
   const auto start = std::chrono::steady_clock::now();
   const BundleResult result = RunBundleAdjustment(input, options);
   EngineRun run;

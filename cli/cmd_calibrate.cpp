@@ -74,7 +74,7 @@ BundleJob JobFromFlags(const BundleCommandOptions& o, const GlobalOptions& globa
   if (!ParseDatumKind(o.datum, &job.options.datum)) {
     throw Error("--datum", "unknown datum '" + o.datum + "' (auto, control, fixed-frames, inner-constraints)");
   }
-  job.options.robust_loss_scale = o.robust_scale;
+  job.options.adjustment.robust_loss_scale = o.robust_scale;
   if (o.balance_radius_mm > 0.0) job.output.balance_radius_mm = o.balance_radius_mm;
   return job;
 }

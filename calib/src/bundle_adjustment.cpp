@@ -15,20 +15,6 @@
 namespace platemeter {
 namespace {
 
-AdjustmentOptions EngineOptions(const BundleOptions& options) {
-  AdjustmentOptions engine;
-  engine.robust_loss_scale = options.robust_loss_scale;
-  engine.rejection_threshold = options.rejection_threshold;
-  engine.false_rejection_rate = options.false_rejection_rate;
-  engine.max_iterations = options.max_iterations;
-  engine.function_tolerance = options.function_tolerance;
-  engine.correlation_threshold = options.correlation_threshold;
-  engine.significance_level = options.significance_level;
-  engine.rank_tolerance = options.rank_tolerance;
-  engine.num_threads = options.num_threads;
-  return engine;
-}
-
 // All frames at one station: no ray intersects another, nothing can be determined.
 void CheckStations(const BundleApproximations& approximations) {
   if (approximations.frames.size() < 2 || approximations.points.empty()) return;
@@ -94,11 +80,11 @@ BundleResult RunBundleAdjustment(const BundleInput& input, const BundleOptions& 
     result.datum_words += "; object coordinates in the frame of the relative orientation (the first pair's "
                           "baseline is 1 unit): give a distance or control points for metres";
   }
-  result.adjustment = problem.Solve(EngineOptions(options), progress);
+  result.adjustment = problem.Solve(options.adjustment, progress);
   const AdjustmentResult& a = result.adjustment;
 
   for (size_t c = 0; c < input.cameras.size(); ++c) {
-    result.cameras.push_back(CollectCamera(input.cameras[c], a, options.significance_level));
+    result.cameras.push_back(CollectCamera(input.cameras[c], a, options.adjustment.significance_level));
     BundleCameraResult& camera = result.cameras.back();
     if (camera.format_width_mm <= 0.0 || camera.format_height_mm <= 0.0) {
       // No format given: the smallest centred one holding every observation (profiles, plots).

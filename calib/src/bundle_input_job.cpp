@@ -401,19 +401,19 @@ void ReadAdjustment(const JobReader& r, const toml::table& t, BundleOptions* o) 
       r.FailKey(*n, "adjustment.datum", "= '" + name + "' must be one of auto, control, fixed-frames, inner-constraints");
     }
   }
-  if (const toml::node* n = t.get("robust_loss_scale")) o->robust_loss_scale = r.Number(*n, "adjustment.robust_loss_scale", 0.0, 1e6);
-  if (const toml::node* n = t.get("rejection_threshold")) o->rejection_threshold = r.Number(*n, "adjustment.rejection_threshold", 0.0, 1e6);
+  if (const toml::node* n = t.get("robust_loss_scale")) o->adjustment.robust_loss_scale = r.Number(*n, "adjustment.robust_loss_scale", 0.0, 1e6);
+  if (const toml::node* n = t.get("rejection_threshold")) o->adjustment.rejection_threshold = r.Number(*n, "adjustment.rejection_threshold", 0.0, 1e6);
   if (const toml::node* n = t.get("false_rejection_rate")) {
-    o->false_rejection_rate = r.Number(*n, "adjustment.false_rejection_rate", 0.0, 0.5, false);
+    o->adjustment.false_rejection_rate = r.Number(*n, "adjustment.false_rejection_rate", 0.0, 0.5, false);
   }
-  if (const toml::node* n = t.get("max_iterations")) o->max_iterations = static_cast<int>(r.Integer(*n, "adjustment.max_iterations", 1, 1000000));
-  if (const toml::node* n = t.get("function_tolerance")) o->function_tolerance = r.Number(*n, "adjustment.function_tolerance", 0.0, 0.1, false);
-  if (const toml::node* n = t.get("correlation_threshold")) o->correlation_threshold = r.Number(*n, "adjustment.correlation_threshold", 0.0, 1.0, false);
+  if (const toml::node* n = t.get("max_iterations")) o->adjustment.max_iterations = static_cast<int>(r.Integer(*n, "adjustment.max_iterations", 1, 1000000));
+  if (const toml::node* n = t.get("function_tolerance")) o->adjustment.function_tolerance = r.Number(*n, "adjustment.function_tolerance", 0.0, 0.1, false);
+  if (const toml::node* n = t.get("correlation_threshold")) o->adjustment.correlation_threshold = r.Number(*n, "adjustment.correlation_threshold", 0.0, 1.0, false);
   if (const toml::node* n = t.get("significance_level")) {
-    o->significance_level = r.Number(*n, "adjustment.significance_level", 0.0, 0.5, false);
+    o->adjustment.significance_level = r.Number(*n, "adjustment.significance_level", 0.0, 0.5, false);
   }
-  if (const toml::node* n = t.get("rank_tolerance")) o->rank_tolerance = r.Number(*n, "adjustment.rank_tolerance", 0.0, 0.1, false);
-  if (const toml::node* n = t.get("num_threads")) o->num_threads = static_cast<int>(r.Integer(*n, "adjustment.num_threads", 0, 4096));
+  if (const toml::node* n = t.get("rank_tolerance")) o->adjustment.rank_tolerance = r.Number(*n, "adjustment.rank_tolerance", 0.0, 0.1, false);
+  if (const toml::node* n = t.get("num_threads")) o->adjustment.num_threads = static_cast<int>(r.Integer(*n, "adjustment.num_threads", 0, 4096));
   std::string why;
   if (!o->Check(&why)) r.Fail(&t, "[adjustment]: " + why);
 }

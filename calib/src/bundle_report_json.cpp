@@ -80,7 +80,7 @@ ordered_json CameraJson(const BundleResult& result, size_t c) {
     j["covariance"]["unscaled"].push_back(row_u);
   }
   j["high_correlations"] = ordered_json::array();
-  for (const auto& [p, q, rho] : a.HighCorrelations(adjusted, result.options.correlation_threshold)) {
+  for (const auto& [p, q, rho] : a.HighCorrelations(adjusted, result.options.adjustment.correlation_threshold)) {
     j["high_correlations"].push_back({{"a", a.parameters[p].name}, {"b", a.parameters[q].name}, {"rho", rho}});
   }
   j["significance_tests"] = ordered_json::array();
@@ -107,7 +107,7 @@ std::string FormatCalibrationJson(const BundleResult& result, const BundleReport
   j["unknowns"] = a.unknowns;
   j["rejected_observations"] = a.rejected;
   j["chi_square_test"] = {{"statistic", a.chi_square.statistic}, {"dof", a.chi_square.dof},
-                          {"alpha", result.options.significance_level},       {"lower", a.chi_square.lower},
+                          {"alpha", result.options.adjustment.significance_level},       {"lower", a.chi_square.lower},
                           {"upper", a.chi_square.upper},          {"p_value", a.chi_square.p_value},
                           {"rejected", a.chi_square.rejected}};
   j["cameras"] = ordered_json::array();

@@ -39,7 +39,7 @@ void StatisticsSection(const BundleResult& result, std::string* out) {
   *out += fmt::format("| observation rows / prior rows / unknowns | {} / {} / {} |\n", a.observation_rows,
                       a.prior_rows, a.unknowns);
   *out += fmt::format("| chi-square test (alpha {}) | {:.1f} in [{:.1f}, {:.1f}]: {} (p = {:.3g}) |\n",
-                      result.options.significance_level, a.chi_square.statistic, a.chi_square.lower,
+                      result.options.adjustment.significance_level, a.chi_square.statistic, a.chi_square.lower,
                       a.chi_square.upper, a.chi_square.rejected ? "rejected" : "accepted", a.chi_square.p_value);
   *out += fmt::format("| rejected observations | {} |\n| converged, iterations | {}, {} |\n", a.rejected,
                       a.converged ? "yes" : "no", a.iterations);
@@ -63,14 +63,14 @@ void CorrelationSection(const BundleResult& result, const BundleCameraResult& ca
     for (int k = 0; k < r.cols(); ++k) *out += fmt::format(" {:+.3f} |", r(i, k));
     *out += " " + names[i] + " |\n";
   }
-  const auto high = a.HighCorrelations(adjusted, result.options.correlation_threshold);
+  const auto high = a.HighCorrelations(adjusted, result.options.adjustment.correlation_threshold);
   if (!high.empty()) {
-    *out += fmt::format("\nCorrelations at or above {}:\n\n", result.options.correlation_threshold);
+    *out += fmt::format("\nCorrelations at or above {}:\n\n", result.options.adjustment.correlation_threshold);
     for (const auto& [p, q, rho] : high) *out += fmt::format("- {} with {}: {:+.4f}\n", a.parameters[p].name, a.parameters[q].name, rho);
   }
   if (!camera.tests.empty()) {
     *out += fmt::format("\nSignificance of the distortion terms (alpha {}):\n\n| terms | statistic | critical | p | significant |\n|---|---:|---:|---:|---|\n",
-                        result.options.significance_level);
+                        result.options.adjustment.significance_level);
     for (const SignificanceTest& t : camera.tests) {
       *out += fmt::format("| {} | {:.3f} ({}) | {:.3f} | {:.3g} | {} |\n", t.what, t.statistic,
                           t.what.find(',') == std::string::npos ? "t" : "F", t.critical, t.p_value,

@@ -97,7 +97,7 @@ PrecisionSimulationResult EvaluatePrecision(const PrecisionPlan& plan, const Pre
   // gauge is imposed (the engine's "control" datum applies no S-transformation;
   // with no control points it is exactly "the priors alone").
   options.datum = datum == PrecisionDatum::kStations ? DatumKind::kControlPoints : DatumKind::kInnerConstraints;
-  options.correlation_threshold = plan.correlation_threshold;
+  options.adjustment.correlation_threshold = plan.correlation_threshold;
   const BundleResult bundle = RunBundleAdjustment(input, options);
   const AdjustmentResult& a = bundle.adjustment;
   if (bundle.cameras.size() != 1) Throw("the adjustment returned no camera");

@@ -589,15 +589,15 @@ TEST(BundleOptions, DatumNamesAndChecks) {
     EXPECT_FALSE(o.Check(&reason));
     EXPECT_NE(reason.find(expected), std::string::npos) << reason;
   };
-  fails([](BundleOptions& o) { o.robust_loss_scale = -1; }, "robust_loss_scale");
-  fails([](BundleOptions& o) { o.rejection_threshold = -1; }, "rejection_threshold");
-  fails([](BundleOptions& o) { o.false_rejection_rate = 0; }, "false_rejection_rate");
-  fails([](BundleOptions& o) { o.max_iterations = 0; }, "max_iterations");
-  fails([](BundleOptions& o) { o.function_tolerance = 0; }, "function_tolerance");
-  fails([](BundleOptions& o) { o.correlation_threshold = 1.5; }, "correlation_threshold");
-  fails([](BundleOptions& o) { o.significance_level = 1.0; }, "significance_level");
-  fails([](BundleOptions& o) { o.rank_tolerance = std::nan(""); }, "rank_tolerance");
-  fails([](BundleOptions& o) { o.num_threads = -1; }, "num_threads");
+  fails([](BundleOptions& o) { o.adjustment.robust_loss_scale = -1; }, "robust_loss_scale");
+  fails([](BundleOptions& o) { o.adjustment.rejection_threshold = -1; }, "rejection_threshold");
+  fails([](BundleOptions& o) { o.adjustment.false_rejection_rate = 0; }, "false_rejection_rate");
+  fails([](BundleOptions& o) { o.adjustment.max_iterations = 0; }, "max_iterations");
+  fails([](BundleOptions& o) { o.adjustment.function_tolerance = 0; }, "function_tolerance");
+  fails([](BundleOptions& o) { o.adjustment.correlation_threshold = 1.5; }, "correlation_threshold");
+  fails([](BundleOptions& o) { o.adjustment.significance_level = 1.0; }, "significance_level");
+  fails([](BundleOptions& o) { o.adjustment.rank_tolerance = std::nan(""); }, "rank_tolerance");
+  fails([](BundleOptions& o) { o.adjustment.num_threads = -1; }, "num_threads");
 }
 
 // ---------------------------------------------------------------------------
@@ -698,14 +698,14 @@ TEST(BundleJob, TheDocsExampleParsesAndEveryKeyArrives) {
   EXPECT_EQ(job.output.export_pixel_size_um, 7.5);
   EXPECT_EQ(job.output.export_image_size_px, (std::array<int, 2>{7334, 7334}));
   EXPECT_EQ(job.options.datum, DatumKind::kAuto);
-  EXPECT_EQ(job.options.robust_loss_scale, 3.0);
-  EXPECT_EQ(job.options.rejection_threshold, 4.0);
-  EXPECT_EQ(job.options.max_iterations, 50);
-  EXPECT_EQ(job.options.function_tolerance, 1e-10);
-  EXPECT_EQ(job.options.correlation_threshold, 0.95);
-  EXPECT_EQ(job.options.significance_level, 0.05);
-  EXPECT_EQ(job.options.rank_tolerance, 1e-12);
-  EXPECT_EQ(job.options.num_threads, 2);
+  EXPECT_EQ(job.options.adjustment.robust_loss_scale, 3.0);
+  EXPECT_EQ(job.options.adjustment.rejection_threshold, 4.0);
+  EXPECT_EQ(job.options.adjustment.max_iterations, 50);
+  EXPECT_EQ(job.options.adjustment.function_tolerance, 1e-10);
+  EXPECT_EQ(job.options.adjustment.correlation_threshold, 0.95);
+  EXPECT_EQ(job.options.adjustment.significance_level, 0.05);
+  EXPECT_EQ(job.options.adjustment.rank_tolerance, 1e-12);
+  EXPECT_EQ(job.options.adjustment.num_threads, 2);
   EXPECT_EQ(job.check_options.min_points_per_frame, 3);
 
   ASSERT_EQ(job.input.cameras.size(), 1u);

@@ -29,7 +29,7 @@ TEST(BundleRank, Apollo14GeometryNamesThePrincipalPointItCannotRecover) {
   Free(&block.input, {0, 1, 2, 3, 6, 7});
   block.input.ground_points.clear();
   BundleOptions options;
-  options.max_iterations = 300;
+  options.adjustment.max_iterations = 300;
   const BundleResult result = RunBundleAdjustment(block.input, options);
   const RankReport& rank = result.adjustment.rank;
   ASSERT_FALSE(rank.directions.empty()) << result.adjustment.summary;

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "support/seed000_tables.h"
 #include "support/test_support.h"
 
 namespace platemeter {
@@ -19,38 +20,7 @@ using testing::RunPlatemeter;
 // Seed 000 Table 1 (pure self-calibration) as a user definition; the OCR
 // reconstructions are documented in tests/calib/profile_seed000_test.cpp and
 // docs/cameras.md. Plus a camera without a lens.
-constexpr char kDefinitions[] = R"toml(
-[[camera]]
-name = "hasselblad-500-selfcal"
-description = "Apollo 14 500 mm Hasselblad, pure in-flight self-calibration (seed 000 Table 1)"
-source = "seed 000, Table 1"
-format_width_mm = 55.0
-format_height_mm = 55.0
-nominal_principal_distance_mm = 500.0
-format_corners_as_fiducials = true
-
-[camera.lens]
-model = "brown-balanced"
-source = "seed 000, Table 1, balanced at r = 30 mm"
-principal_distance_mm = 502.630
-principal_point_x_mm = 0.0
-principal_point_y_mm = 0.0
-
-[camera.lens.coefficients]
-k0 = -0.14065e-1
-k1_per_mm2 = +0.15614e-4
-k2_per_mm4 = 0.0
-p1_per_mm = +0.3604e-5
-p2_per_mm = +0.2998e-5
-
-[camera.lens.sigmas]
-principal_distance_mm = 2.060
-k0 = 0.58e-4
-k1_per_mm2 = 0.172e-6
-k2_per_mm4 = 0.0
-p1_per_mm = 0.3575e-5
-p2_per_mm = 0.3020e-5
-
+const std::string kDefinitions = std::string(testing::kSeed000Tables1And3Toml) + R"toml(
 [[camera]]
 name = "no-lens"
 description = "a camera without a lens calibration"

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "cmd_calibrate_simulate.h"
+#include "cmd_calibrate_stellar.h"
 #include "commands.h"
 #include "platemeter/calib/bundle_adjustment.h"
 #include "platemeter/calib/bundle_input_io.h"
@@ -145,6 +146,7 @@ void RegisterCalibrateCommand(CLI::App& app, GlobalOptions& global) {
   bundle->add_flag("--quiet", o->quiet, "no progress on stderr");
   bundle->callback([o, &global] { RunBundle(*o, global); });
   RegisterCalibrateSimulate(calibrate, global);
+  RegisterCalibrateStellar(calibrate, global);
 }
 
 }  // namespace platemeter::cli

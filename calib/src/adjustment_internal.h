@@ -1,6 +1,7 @@
 #pragma once
 // The engine's inside (adjustment.h): blocks, observations and priors as the
 // solver and the normal-equation reduction both see them.
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -23,7 +24,10 @@ struct AdjustmentBlock {
   std::vector<bool> has_prior;  // a prior observation touches the parameter
   int global_offset = -1;       // among the non-point parameters; -1 for a point
   int point_index = -1;         // among the point blocks; -1 otherwise
-  bool IsFixed(int i) const { return states[i].kind == ParameterState::Kind::kFixed; }
+  // A point block of fewer than 3 parameters is padded to 3 with fixed ones.
+  bool IsFixed(int i) const {
+    return i >= static_cast<int>(states.size()) || states[i].kind == ParameterState::Kind::kFixed;
+  }
 };
 
 // Residuals whitened by a square root of the information matrix:
@@ -36,8 +40,12 @@ class WhitenedCost : public ceres::CostFunction {
   const Eigen::MatrixXd& sqrt_information() const { return sqrt_information_; }
 
  private:
+  void Whiten(double* row_major, int cols) const;  // L times a num_residuals x cols matrix
   std::unique_ptr<ceres::CostFunction> raw_;
   Eigen::MatrixXd sqrt_information_;
+  // L of an image observation (d <= 2), row-major, inside the object: read
+  // at every evaluation, it is one cache miss fewer than the matrix's storage.
+  std::array<double, 4> small_sqrt_information_{};
 };
 
 // A prior observation of some parameters of one block: L (x[indices] - values).

@@ -14,8 +14,8 @@ int AdjustmentProblem::AddBlock(const std::string& label, const std::string& gro
   if (names.size() != values.size() || names.empty()) {
     throw Error("adjustment", fmt::format("block '{}': {} names for {} values", label, names.size(), values.size()));
   }
-  if (kind == BlockKind::kPoint && names.size() != 3) {
-    throw Error("adjustment", fmt::format("point block '{}' must have 3 parameters", label));
+  if (kind == BlockKind::kPoint && names.size() > 3) {
+    throw Error("adjustment", fmt::format("point block '{}' must have 1 to 3 parameters", label));
   }
   for (double v : values) {
     if (!std::isfinite(v)) throw Error("adjustment", fmt::format("block '{}' has a non-finite value", label));
@@ -114,6 +114,11 @@ int AdjustmentProblem::AddObservation(ceres::CostFunction* cost, const std::vect
   return static_cast<int>(impl_->observation_equation.size()) - 1;
 }
 
+void AdjustmentProblem::ReserveObservations(size_t count) {
+  impl_->equations.reserve(impl_->equations.size() + count);
+  impl_->observation_equation.reserve(impl_->observation_equation.size() + count);
+}
+
 void AdjustmentProblem::SetGauge(const Eigen::MatrixXd& basis, const std::vector<std::string>& names,
                                  const std::vector<bool>& trace_rows, bool is_datum) {
   if (basis.rows() != impl_->num_global || static_cast<int>(trace_rows.size()) != impl_->num_global ||
@@ -145,6 +150,7 @@ bool AdjustmentOptions::Check(std::string* why) const {
   if (!(false_rejection_rate > 0.0 && false_rejection_rate < 0.5)) return fail("false_rejection_rate must be in (0, 0.5)");
   if (max_iterations < 1) return fail("max_iterations must be at least 1");
   if (!(function_tolerance > 0.0)) return fail("function_tolerance must be positive");
+  if (!(parameter_tolerance > 0.0)) return fail("parameter_tolerance must be positive");
   if (!(correlation_threshold > 0.0 && correlation_threshold <= 1.0)) {
     return fail("correlation_threshold must be in (0, 1]");
   }

@@ -47,7 +47,14 @@ void ConfigureSolver(const AdjustmentProblem::Impl& impl, const AdjustmentOption
   solver->max_num_iterations = options.max_iterations;
   solver->function_tolerance = options.function_tolerance;
   solver->gradient_tolerance = 1e-14;
-  solver->parameter_tolerance = 1e-12;
+  solver->parameter_tolerance = options.parameter_tolerance;
+  if (options.polish) {
+    // Near the minimum v'Pv changes below its own round-off and the trust
+    // region rejects good Gauss-Newton steps; non-monotonic steps keep taking them.
+    solver->use_nonmonotonic_steps = true;
+    solver->max_consecutive_nonmonotonic_steps = options.max_iterations;
+    solver->min_relative_decrease = 0.0;
+  }
   solver->num_threads = options.num_threads > 0 ? options.num_threads
                                                 : std::max(1u, std::thread::hardware_concurrency());
   solver->logging_type = ceres::SILENT;
@@ -116,9 +123,12 @@ AdjustmentResult AdjustmentProblem::Solve(const AdjustmentOptions& options, cons
     for (int b : equation.blocks) parameters.push_back(impl.blocks[b].values.data());
     equation.loss = nullptr;
     ceres::LossFunction* loss = nullptr;
-    if (!equation.is_prior) {
+    // Only the robust pass needs a loss (a wrapper it can reset to none
+    // afterwards); without one Ceres skips the loss's correction of every
+    // residual and Jacobian.
+    if (!equation.is_prior && robust) {
       equation.loss = new ceres::LossFunctionWrapper(
-          robust ? new ceres::CauchyLoss(options.robust_loss_scale) : nullptr, ceres::TAKE_OWNERSHIP);
+          new ceres::CauchyLoss(options.robust_loss_scale), ceres::TAKE_OWNERSHIP);
       loss = equation.loss;
     }
     equation.id = problem.AddResidualBlock(equation.cost.get(), loss, parameters);

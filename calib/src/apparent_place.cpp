@@ -108,6 +108,22 @@ ObservedPlace ApparentPlaceCalculator::Observe(const CatalogStar& star) const {
   return p;
 }
 
+CatalogStar ApparentPlaceCalculator::Unobserve(const Eigen::Vector3d& enu) const {
+  const Eigen::Vector3d u = enu.normalized();
+  const double azimuth_rad = std::atan2(u.x(), u.y());
+  const double zenith_distance_rad = std::acos(std::clamp(u.z(), -1.0, 1.0));
+  eraASTROM* astrom = &impl_->astrom;  // not modified (see Observe)
+  double ri = 0.0, di = 0.0;
+  eraAtoiq("A", azimuth_rad, zenith_distance_rad, astrom, &ri, &di);
+  double rc = 0.0, dc = 0.0;
+  eraAticq(ri, di, astrom, &rc, &dc);
+  CatalogStar star;
+  star.ra_rad = eraAnp(rc);
+  star.dec_rad = dc;
+  star.epoch_jyear = 2000.0;
+  return star;
+}
+
 ObservedPlace ObserveStar(const CatalogStar& star, const ApparentPlaceOptions& options, const UtcInstant& utc) {
   return ApparentPlaceCalculator(options, utc).Observe(star);
 }

@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <unordered_map>
 
 #include <fmt/format.h>
 
+#include "bundle_collinearity.h"
 #include "bundle_equations.h"
 #include "platemeter/core/error.h"
 
@@ -107,7 +109,8 @@ BuiltBundle BuildBundleProblem(const BundleInput& input, const BundleApproximati
                                DatumKind requested, AdjustmentProblem* problem) {
   BuiltBundle built;
   built.datum = ResolveDatum(input, requested);
-  std::map<std::string, int> camera_index, frame_index, point_index;
+  // Hash maps: 400 000 observations look their blocks up by id.
+  std::unordered_map<std::string, int> camera_index, frame_index, point_index;
   for (const CameraSetup& camera : input.cameras) {
     if (!camera_index.emplace(camera.name, static_cast<int>(built.camera_blocks.size())).second) {
       throw Error("bundle", "camera '" + camera.name + "' is defined twice");
@@ -120,7 +123,7 @@ BuiltBundle BuildBundleProblem(const BundleInput& input, const BundleApproximati
     built.camera_blocks.push_back(block);
   }
   // Frames: with a fixed-frames datum and none flagged, the frame with the most observations is held.
-  std::map<std::string, int> observations_of;
+  std::unordered_map<std::string, int> observations_of;
   for (const ImageObservation& o : input.observations) ++observations_of[o.frame];
   std::string held;
   const bool any_fixed = std::any_of(input.frames.begin(), input.frames.end(), [](const auto& f) { return f.fixed; });
@@ -146,9 +149,9 @@ BuiltBundle BuildBundleProblem(const BundleInput& input, const BundleApproximati
     built.frame_blocks.push_back(block);
   }
   // Points: those in distance equations stay in the reduced system.
-  std::map<std::string, bool> in_distance;
+  std::unordered_map<std::string, bool> in_distance;
   for (const DistanceObservation& d : input.distances) in_distance[d.from] = in_distance[d.to] = true;
-  std::map<std::string, const GroundPoint*> ground;
+  std::unordered_map<std::string, const GroundPoint*> ground;
   for (const GroundPoint& g : input.ground_points) ground[g.id] = &g;
   for (const auto& [id, position] : approximations.points) {
     const bool global = in_distance.count(id) > 0;
@@ -162,11 +165,19 @@ BuiltBundle BuildBundleProblem(const BundleInput& input, const BundleApproximati
     built.point_blocks.push_back(block);
     built.point_control.push_back(control);
   }
+  problem->ReserveObservations(input.observations.size() + input.distances.size());
+  // Observations usually come frame by frame: look the frame up when it changes.
+  const std::string* last_frame = nullptr;
+  int frame = -1, camera = -1;
   for (const ImageObservation& o : input.observations) {
-    const int camera = camera_index.at(input.frames[frame_index.at(o.frame)].camera);
+    if (last_frame == nullptr || o.frame != *last_frame) {
+      frame = frame_index.at(o.frame);
+      camera = camera_index.at(input.frames[frame].camera);
+      last_frame = &o.frame;
+    }
     Eigen::Matrix2d covariance = Eigen::Vector2d(o.sigma_x_mm * o.sigma_x_mm, o.sigma_y_mm * o.sigma_y_mm).asDiagonal();
-    problem->AddObservation(CollinearityEquation::Create(o.x_mm, o.y_mm),
-                            {built.camera_blocks[camera], built.frame_blocks[frame_index.at(o.frame)],
+    problem->AddObservation(new CollinearityCost(o.x_mm, o.y_mm, frame),
+                            {built.camera_blocks[camera], built.frame_blocks[frame],
                              built.point_blocks[point_index.at(o.point_id)]},
                             covariance, o.frame, o.point_id, o.origin);
   }

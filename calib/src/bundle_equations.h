@@ -8,6 +8,25 @@
 
 namespace platemeter::bundle_internal {
 
+// I + d(correction)/d(x, y) at the measured point (x_mm, y_mm), row-major, by
+// central differences on the camera's values (c, xp, yp, then BrownAffine's
+// seven): the slope that carries eq. (1)'s residual back to the measured plane.
+inline void CorrectionSlope(const double* camera, double x_mm, double y_mm, double* j) {
+  const double* p = camera + 3;
+  const double xb = x_mm - camera[1];
+  const double yb = y_mm - camera[2];
+  const double h = 1e-3;  // mm
+  double ax, ay, bx, by, cx, cy, dx, dy;
+  BrownAffine::Apply(p, xb + h, yb, &ax, &ay);
+  BrownAffine::Apply(p, xb - h, yb, &bx, &by);
+  BrownAffine::Apply(p, xb, yb + h, &cx, &cy);
+  BrownAffine::Apply(p, xb, yb - h, &dx, &dy);
+  j[0] = 1.0 + (ax - bx) / (2 * h);
+  j[1] = (cx - dx) / (2 * h);
+  j[2] = (ay - by) / (2 * h);
+  j[3] = 1.0 + (cy - dy) / (2 * h);
+}
+
 // Eq. (1) as the seed writes it: the measured point corrected by the inner
 // cone (BrownAffine, correction form) minus the central projection, mm;
 // carried back to the measured plane by the inverse of the correction's slope
@@ -18,6 +37,9 @@ namespace platemeter::bundle_internal {
 // only (a weight, as in iteratively reweighted least squares).
 // Blocks: camera (c, xp, yp, k1, k2, k3, p1, p2, b1, b2), frame (X, Y, Z m,
 // phi, omega, kappa rad), point (X, Y, Z m).
+// The bundle adjusts with the same residual's analytic form
+// (bundle_collinearity.h CollinearityCost); this automatic one is the
+// reference its Jacobians are tested against.
 struct CollinearityEquation {
   double x_mm = 0.0;
   double y_mm = 0.0;
@@ -31,30 +53,14 @@ struct CollinearityEquation {
                                             ideal_plane)) {
       return false;
     }
+    double camera_values[10];
+    for (int i = 0; i < 10; ++i) camera_values[i] = distortion_internal::ScalarPart(camera[i]);
     double j[4];
-    CorrectionSlope(camera, j);
+    CorrectionSlope(camera_values, x_mm, y_mm, j);
     const double det = j[0] * j[3] - j[1] * j[2];
     residual_mm[0] = (j[3] * ideal_plane[0] - j[1] * ideal_plane[1]) / det;
     residual_mm[1] = (-j[2] * ideal_plane[0] + j[0] * ideal_plane[1]) / det;
     return true;
-  }
-  // I + d(correction)/d(x, y) at the measured point, row-major, by central differences on the values.
-  template <typename T>
-  void CorrectionSlope(const T* camera, double* j) const {
-    double p[BrownAffine::kNumParams];
-    for (int i = 0; i < BrownAffine::kNumParams; ++i) p[i] = distortion_internal::ScalarPart(camera[3 + i]);
-    const double xb = x_mm - distortion_internal::ScalarPart(camera[1]);
-    const double yb = y_mm - distortion_internal::ScalarPart(camera[2]);
-    const double h = 1e-3;  // mm
-    double ax, ay, bx, by, cx, cy, dx, dy;
-    BrownAffine::Apply(p, xb + h, yb, &ax, &ay);
-    BrownAffine::Apply(p, xb - h, yb, &bx, &by);
-    BrownAffine::Apply(p, xb, yb + h, &cx, &cy);
-    BrownAffine::Apply(p, xb, yb - h, &dx, &dy);
-    j[0] = 1.0 + (ax - bx) / (2 * h);
-    j[1] = (cx - dx) / (2 * h);
-    j[2] = (ay - by) / (2 * h);
-    j[3] = 1.0 + (cy - dy) / (2 * h);
   }
   static ceres::CostFunction* Create(double x_mm, double y_mm) {
     return new ceres::AutoDiffCostFunction<CollinearityEquation, 2, 10, 6, 3>(new CollinearityEquation{x_mm, y_mm});

@@ -3,16 +3,15 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <filesystem>
 
 #include <fmt/format.h>
 
 #include "bundle_report_internal.h"
+#include "output_files.h"
 #include "platemeter/calib/bundle_report.h"
 #include "platemeter/calib/camera_export.h"
 #include "platemeter/core/error.h"
 #include "platemeter/grids/definition_io.h"
-#include "platemeter/measure/atomic_file.h"
 
 namespace platemeter {
 
@@ -119,9 +118,6 @@ std::vector<std::string> WriteBundleOutputs(const std::string& dir, const Bundle
                                             const BundleReportOptions& options) {
   std::string why;
   if (!options.Check(&why)) throw Error("bundle report options", why);
-  std::error_code error;
-  std::filesystem::create_directories(dir, error);
-  if (error) throw Error(dir, "cannot create the output folder: " + error.message());
   // Every text is formatted before the first file is written: a failure leaves no partial set.
   std::vector<std::pair<std::string, std::string>> files;
   files.emplace_back("calibration.json", FormatCalibrationJson(result, options));
@@ -137,13 +133,7 @@ std::vector<std::string> WriteBundleOutputs(const std::string& dir, const Bundle
       AppendExports(CalibratedCameraDefinition(result, static_cast<int>(c), options.title), options, &files);
     }
   }
-  std::vector<std::string> written;
-  for (const auto& [name, text] : files) {
-    const std::string path = (std::filesystem::path(dir) / name).string();
-    WriteFileAtomically(path, text);
-    written.push_back(path);
-  }
-  return written;
+  return WriteOutputFiles(dir, files);
 }
 
 }  // namespace platemeter

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bundle_report_internal.h"
+#include "report_json.h"
 #include "platemeter/calib/bundle_report.h"
 
 namespace platemeter {
@@ -13,30 +14,6 @@ namespace {
 using nlohmann::ordered_json;
 
 ordered_json Optional(const std::optional<double>& v) { return v ? ordered_json(*v) : ordered_json(nullptr); }
-
-ordered_json RankJson(const RankReport& rank) {
-  ordered_json j;
-  j["parameters"] = rank.num_parameters;
-  j["structural_rank"] = rank.structural_rank;
-  j["numerical_rank"] = rank.numerical_rank;
-  j["datum_defect"] = rank.datum_defect;
-  j["condition_number"] = rank.condition_number;
-  j["untouched"] = rank.untouched;
-  j["points_undetermined"] = rank.points_undetermined;
-  j["directions"] = ordered_json::array();
-  for (const NullDirection& d : rank.directions) {
-    ordered_json e;
-    e["kind"] = d.exact ? "null" : "weak";
-    e["relative_eigenvalue"] = d.relative_eigenvalue;
-    e["words"] = d.words;
-    e["shares"] = ordered_json::object();
-    for (const auto& [name, share] : d.shares) {
-      if (share >= 0.01) e["shares"][name] = share;
-    }
-    j["directions"].push_back(e);
-  }
-  return j;
-}
 
 ordered_json TestJson(const SignificanceTest& t) {
   return {{"terms", t.what},          {"statistic", t.statistic}, {"critical", t.critical},
@@ -112,7 +89,7 @@ std::string FormatCalibrationJson(const BundleResult& result, const BundleReport
                           {"rejected", a.chi_square.rejected}};
   j["cameras"] = ordered_json::array();
   for (size_t c = 0; c < result.cameras.size(); ++c) j["cameras"].push_back(CameraJson(result, c));
-  j["rank"] = RankJson(a.rank);
+  j["rank"] = RankReportJson(a.rank);
   j["frames"] = ordered_json::array();
   for (const BundleFrameResult& f : result.frames) {
     ordered_json e;

@@ -73,4 +73,8 @@ std::vector<CatalogStar> LoadStarCatalog(const std::string& path, const StarQuer
   return out;
 }
 
+std::string CatalogStarKey(const CatalogStar& star) {
+  return (star.id_is_hd ? "HD" : "KS") + std::to_string(star.id);
+}
+
 }  // namespace platemeter::calib

@@ -95,9 +95,7 @@ bool StarFieldOptions::Check(std::string* why) const {
   return true;
 }
 
-std::string StarId(const calib::CatalogStar& star) {
-  return (star.id_is_hd ? "HD" : "KS") + std::to_string(star.id);
-}
+std::string StarId(const calib::CatalogStar& star) { return calib::CatalogStarKey(star); }
 
 double PlateDuration_s(const StarFieldOptions& options) {
   double end = 0.0;

@@ -54,4 +54,6 @@ double PeakRssMb() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KB on Linux
 }
 
+std::string ReadTextFile(const std::string& path) { return ReadAll(path); }
+
 }  // namespace platemeter::testing

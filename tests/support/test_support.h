@@ -26,6 +26,9 @@ struct CommandResult {
 // Runs the platemeter binary with a shell-quoted argument string.
 CommandResult RunPlatemeter(const std::string& arguments);
 
+// The whole content of a text file ("" if it cannot be read).
+std::string ReadTextFile(const std::string& path);
+
 // Peak resident set size of this process so far, in MB.
 double PeakRssMb();
 

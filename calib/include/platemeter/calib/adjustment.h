@@ -30,7 +30,8 @@ class CostFunction;
 
 namespace platemeter {
 
-// Point blocks are eliminated from the normal equations (seed 000's reduced
+// Point blocks (1 to 3 parameters: a ground point, a star's direction
+// correction) are eliminated from the normal equations (seed 000's reduced
 // normal equations); the others are carried in the reduced system.
 enum class BlockKind { kGlobal, kStation, kPoint };
 
@@ -48,6 +49,16 @@ struct AdjustmentOptions {
   // 400 000 observations) a step changing it by 1e-10 of itself moves the
   // solution by under 0.01 sigma in any direction.
   double function_tolerance = 1e-10;
+  // Step that ends a pass, relative to the norm of all parameters (Ceres'
+  // parameter_tolerance): with a principal distance of 80 mm among them, 1e-12
+  // stops at steps of 8e-11 mm. Lower both tolerances (1e-16) to drive a
+  // solution to its last digits, as a reference solution must.
+  double parameter_tolerance = 1e-12;
+  // Reference solutions: keep taking Gauss-Newton steps after v'Pv stops
+  // telling better from worse (it changes below its round-off within ~1e-6
+  // sigma of the minimum), until max_iterations; with both tolerances at
+  // 1e-16 the solution reaches its stationary point to ~1e-12 sigma.
+  bool polish = false;
   double correlation_threshold = 0.9; // |rho| named in the report
   double significance_level = 0.05;   // alpha of the chi-square and t/F tests
   double rank_tolerance = 1e-12;      // relative eigenvalue of the scaled reduced normal matrix counted as zero
@@ -162,7 +173,7 @@ struct AdjustmentResult {
   // Point blocks: values and (scaled) sigmas.
   struct PointEstimate {
     std::string label;
-    Eigen::Vector3d value = Eigen::Vector3d::Zero();
+    Eigen::Vector3d value = Eigen::Vector3d::Zero();  // a block of fewer than 3 parameters: the rest 0
     std::optional<Eigen::Vector3d> sigma;
     int rays = 0;
   };
@@ -211,6 +222,9 @@ class AdjustmentProblem {
   int AddObservation(ceres::CostFunction* cost, const std::vector<int>& blocks,
                      const Eigen::MatrixXd& covariance, const std::string& group,
                      const std::string& item, const std::string& origin);
+  // Room for `count` more observations, so that a large problem's equations
+  // are not moved again and again as they are added (400 000 in a large block).
+  void ReserveObservations(size_t count);
   // A basis of the network's gauge freedom in the non-point parameters
   // (columns, each named, e.g. "the network's scale"; rows ordered as the
   // blocks' parameters, fixed ones included). With `is_datum` the datum leaves

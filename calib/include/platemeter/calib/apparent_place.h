@@ -84,6 +84,11 @@ class ApparentPlaceCalculator {
   ApparentPlaceCalculator& operator=(ApparentPlaceCalculator&&) noexcept;
 
   ObservedPlace Observe(const CatalogStar& star) const;
+  // The inverse: the ICRS place (J2000.0, no proper motion or parallax) of a
+  // star seen in the direction `enu` (x east, y north, z up), through ERFA's
+  // eraAtoiq and eraAticq (refraction, aberration, light deflection undone).
+  // Observe() of the result returns `enu` to well under 0.01".
+  CatalogStar Unobserve(const Eigen::Vector3d& enu) const;
   // True when ERFA flags the date as beyond its leap-second table (UTC-TAI may be off by whole seconds).
   bool dubious_date() const;
 

@@ -71,6 +71,10 @@ std::string DefaultStarCatalogPath();  // "/usr/share/kstars/stars.dat"
 // platemeter::Error(path, reason) for a missing, unreadable or malformed file.
 std::vector<CatalogStar> LoadStarCatalog(const std::string& path, const StarQueryOptions& query);
 
+// The key of a star in platemeter's files: "HD<n>" for an HD number, else
+// "KS<record>" (the kstars record number).
+std::string CatalogStarKey(const CatalogStar& star);
+
 // Angular distance between two directions, rad (numerically safe at all separations).
 double AngularSeparation(double ra1_rad, double dec1_rad, double ra2_rad, double dec2_rad);
 

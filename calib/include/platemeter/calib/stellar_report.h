@@ -1,0 +1,40 @@
+#pragma once
+// The outputs of a stellar calibration job (docs/stellar-job.md, "Outputs"):
+//   calibration.json   every plate (seed 001 Table 2) and combination (Table 3),
+//                      plate frame and seed 001's printed frame, statistics, rank
+//   report.md          Tables 2 and 3 in seed 001's form (printed frame, um)
+//   residuals.csv      one row per image: plate, image, star, status, vx, vy (um), reason
+//   identification.csv one row per detected star: plate, star key, catalog key, status
+//   camera-NAME.toml   the calibrated camera (the last combination, or the
+//                      single plate) as a camera definition `measure` loads
+// Every text is formatted before the first file is written.
+#include <string>
+#include <vector>
+
+#include "platemeter/calib/stellar_job.h"
+
+namespace platemeter {
+
+// The Table-2/3 row of a camera: seed 001's printed (left-handed) frame and
+// units: C, xp, yp, xs, ys in um (xs, ys from the reseau centre), K1..K5 as
+// printed, Phi_T in degrees.
+struct PrintedCamera {
+  std::array<double, kStellarCameraParams> value{};
+  std::array<double, kStellarCameraParams> sigma{};
+};
+inline constexpr std::array<const char*, kStellarCameraParams> kPrintedCameraNames = {
+    "C_um", "xp_um", "yp_um", "xs_um", "ys_um", "K1", "K2", "K3", "K4", "K5", "Phi_T_deg"};
+PrintedCamera ToPrinted(const StellarCamera& values, const StellarCamera& sigmas);
+
+std::string FormatStellarJson(const StellarJob& job, const StellarJobResult& result);
+std::string FormatStellarMarkdown(const StellarJob& job, const StellarJobResult& result);
+std::string FormatStellarResidualsCsv(const StellarJobResult& result);
+std::string FormatIdentificationCsv(const StellarJobResult& result);
+// The calibrated camera: the job's definition with a new orbigon-11 lens (printed frame) and sigmas.
+CameraDefinition StellarCameraDefinition(const StellarJob& job, const StellarJobResult& result);
+
+// Writes the outputs into `dir` (created); returns the paths written.
+std::vector<std::string> WriteStellarOutputs(const std::string& dir, const StellarJob& job,
+                                             const StellarJobResult& result);
+
+}  // namespace platemeter

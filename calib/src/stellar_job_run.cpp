@@ -1,0 +1,106 @@
+// RunStellarJob (stellar_job.h): catalog, identification, one adjustment per
+// plate, the weighted means.
+#include <cmath>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "platemeter/calib/stellar_job.h"
+#include "platemeter/core/error.h"
+
+namespace platemeter {
+namespace {
+
+constexpr double kRadPerDeg = M_PI / 180.0;
+
+StellarCatalog LoadCatalog(const StellarJob& job) {
+  calib::StarQueryOptions query;
+  query.faint_limit_mag = job.magnitude_limit;
+  StellarCatalog catalog;
+  for (const calib::CatalogStar& star : calib::LoadStarCatalog(job.catalog_path, query))
+    catalog[calib::CatalogStarKey(star)] = {star, job.catalog_sigma_arcsec};
+  return catalog;
+}
+
+// The approximate optical axis in the site's frame at the plate's first image.
+Eigen::Vector3d AxisEnu(const StellarJobPlate& p) {
+  if (p.axis_ra_dec_deg) {
+    calib::CatalogStar pointing;
+    pointing.ra_rad = p.axis_ra_dec_deg->first * kRadPerDeg;
+    pointing.dec_rad = p.axis_ra_dec_deg->second * kRadPerDeg;
+    return calib::ApparentPlaceCalculator(p.plate.place, p.plate.images.front().mid_time).Observe(pointing).enu;
+  }
+  const double a = p.axis_azimuth_deg * kRadPerDeg, h = p.axis_altitude_deg * kRadPerDeg;
+  return Eigen::Vector3d(std::cos(h) * std::sin(a), std::cos(h) * std::cos(a), std::sin(h));
+}
+
+// Identifies the plate's stars whose ids are not catalog keys and renames
+// them: catalog key, or "<plate>:<id>" for a star left unknown.
+IdentificationResult IdentifyPlate(const StellarJob& job, const StellarJobPlate& p, const StellarCatalog& catalog,
+                                   const StellarCamera& camera, StellarPlate* plate) {
+  std::vector<DetectedStarImage> images;
+  for (const StarImageObservation& o : p.plate.images) {
+    if (!catalog.count(o.star_id)) images.push_back({o.star_id, o.mid_time, o.x_mm, o.y_mm});
+  }
+  IdentificationResult r = IdentifyStars(images, catalog, p.plate.place, AxisEnu(p), camera, job.identification);
+  for (StarImageObservation& o : plate->images) {
+    if (catalog.count(o.star_id)) continue;
+    auto it = r.catalog_id.find(o.star_id);
+    o.star_id = it != r.catalog_id.end() ? it->second : p.plate.id + ":" + o.star_id;
+  }
+  return r;
+}
+
+StellarCamera InitialCamera(const CameraDefinition& camera, bool* printed_left_handed) {
+  *printed_left_handed = false;
+  if (camera.lens && camera.lens->model == "orbigon-11") {
+    *printed_left_handed = true;  // seed 001's printed frame (docs/stellar.md)
+    return StellarCameraFromModel(CameraModelFromLensCalibration(*camera.lens, "camera " + camera.name), true);
+  }
+  if (camera.nominal_principal_distance_mm > 0.0) return NominalStellarCamera(camera.nominal_principal_distance_mm);
+  throw Error("camera " + camera.name, "has neither an orbigon-11 lens nor a nominal principal distance to start from");
+}
+
+}  // namespace
+
+StellarJobResult RunStellarJob(const StellarJob& job, const AdjustmentProgress& progress) {
+  StellarJobResult out;
+  out.initial = InitialCamera(job.camera, &out.printed_left_handed);
+  out.catalog = LoadCatalog(job);
+  for (const StellarJobPlate& p : job.plates) {
+    StellarPlate plate = p.plate;
+    std::optional<Eigen::Matrix3d> pointing;
+    std::optional<IdentificationResult> identification;
+    bool all_known = true;
+    for (const StarImageObservation& o : plate.images) all_known = all_known && out.catalog.count(o.star_id);
+    if (job.identify && !all_known) {
+      if (progress) progress("identification " + plate.id, 0.0);
+      identification = IdentifyPlate(job, p, out.catalog, out.initial, &plate);
+      pointing = identification->camera_from_enu;
+    }
+    if (progress) progress("plate " + plate.id, 0.0);
+    out.singles.push_back(RunStellarPlate(plate, out.catalog, out.initial, job.options, pointing, progress));
+    out.plates.push_back(std::move(plate));
+    out.identification.push_back(std::move(identification));
+  }
+  std::map<std::string, std::vector<int>> groups;
+  for (int i = 0; i < static_cast<int>(out.plates.size()); ++i) groups[out.plates[i].group].push_back(i);
+  auto combine = [&](const std::string& name, const std::vector<int>& members) {
+    if (progress) progress("combination " + name, 0.0);
+    std::vector<StellarPlate> plates;
+    std::vector<StellarPlateResult> singles;
+    for (int i : members) plates.push_back(out.plates[i]), singles.push_back(out.singles[i]);
+    out.combinations.push_back(CombineStellarPlates(name, plates, singles, out.catalog, job.options));
+  };
+  for (const auto& [group, members] : groups) {
+    if (members.size() >= 2 && groups.size() > 1) combine(group.empty() ? "(no group)" : group, members);
+  }
+  if (out.plates.size() >= 2) {
+    std::vector<int> all(out.plates.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+    combine("all plates", all);
+  }
+  return out;
+}
+
+}  // namespace platemeter

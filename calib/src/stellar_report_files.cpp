@@ -1,0 +1,196 @@
+// calibration.json, the CSV files, the calibrated camera and the writing of
+// a stellar calibration job's outputs (stellar_report.h).
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "platemeter/calib/stellar_report.h"
+#include "platemeter/core/error.h"
+#include "platemeter/grids/definition_io.h"
+#include "output_files.h"
+#include "report_json.h"
+
+namespace platemeter {
+namespace {
+
+using nlohmann::ordered_json;
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+ordered_json CameraJson(const StellarCamera& values, const StellarCamera& sigmas) {
+  ordered_json j;
+  ordered_json plate = ordered_json::object();
+  for (int i = 0; i < kStellarCameraParams; ++i) plate[kStellarCameraParamNames[i]] = {{"value", values[i]}, {"sigma", sigmas[i]}};
+  const PrintedCamera p = ToPrinted(values, sigmas);
+  ordered_json printed = ordered_json::object();
+  for (int i = 0; i < kStellarCameraParams; ++i) printed[kPrintedCameraNames[i]] = {{"value", p.value[i]}, {"sigma", p.sigma[i]}};
+  j["plate_frame"] = plate;
+  j["seed001_printed_frame"] = printed;
+  return j;
+}
+
+ordered_json PlateJson(const StellarPlateResult& s, const std::optional<IdentificationResult>& id) {
+  ordered_json j;
+  j["id"] = s.plate_id;
+  j["group"] = s.group;
+  j["catalog_stars"] = s.catalog_stars;
+  j["unknown_stars"] = s.unknown_stars;
+  j["images"] = s.images;
+  j["rejected_images"] = s.rejected_images;
+  j["camera"] = CameraJson(s.camera, s.camera_sigma);
+  j["deformation"] = {{"cx_mm", s.cx_mm}, {"cx_sigma_mm", s.cx_sigma_mm}, {"cy_mm", s.cy_mm},
+                      {"cy_sigma_mm", s.cy_sigma_mm}, {"epsilon_rad", s.epsilon_rad},
+                      {"epsilon_sigma_rad", s.epsilon_sigma_rad}};
+  j["orientation_sets"] = ordered_json::array();
+  for (const OrientationSetResult& o : s.orientation_sets) {
+    j["orientation_sets"].push_back({{"index", o.index}, {"start_s", o.start_s}, {"end_s", o.end_s},
+                                     {"images", o.images}, {"axis_azimuth_deg", o.axis_azimuth_deg},
+                                     {"axis_altitude_deg", o.axis_altitude_deg}, {"roll_deg", o.roll_deg},
+                                     {"sigma_arcsec", o.sigma_arcsec}});
+  }
+  j["largest_motion_arcsec"] = s.largest_motion_arcsec;
+  j["m_o"] = s.m_o;
+  j["m_p_um"] = s.m_p_um;
+  j["statistics"] = StatisticsJson(s.adjustment);
+  j["rank"] = RankReportJson(s.adjustment.rank);
+  if (id) {
+    j["identification"] = {{"identified", id->catalog_id.size()}, {"unknown", id->unknown.size()},
+                           {"ambiguous", id->ambiguous.size()}, {"hypotheses", id->hypotheses_tried},
+                           {"false_alarm_probability", id->false_alarm_probability}, {"rms_arcsec", id->rms_arcsec}};
+  }
+  return j;
+}
+
+ordered_json CombinationJson(const StellarCombination& c) {
+  ordered_json j;
+  j["name"] = c.name;
+  j["plates"] = c.plate_ids;
+  j["camera"] = CameraJson(c.camera, c.camera_sigma);
+  j["m_0"] = c.m_0;
+  j["degrees_of_freedom"] = c.dof;
+  j["m_p_um"] = c.m_p_um;
+  j["m_p_after_um"] = c.m_p_after_um;
+  j["relinearizations"] = c.relinearizations;
+  j["pope_one_step_offset_sigma"] = c.one_step_offset_sigma;
+  std::vector<std::vector<double>> correlation(kStellarCameraParams, std::vector<double>(kStellarCameraParams, 0.0));
+  for (int a = 0; a < kStellarCameraParams; ++a) {
+    for (int b = 0; b < kStellarCameraParams; ++b) {
+      const double d = std::sqrt(c.cofactor(a, a) * c.cofactor(b, b));
+      correlation[a][b] = d > 0 ? c.cofactor(a, b) / d : 0.0;
+    }
+  }
+  j["correlation"] = correlation;
+  j["consistency"] = ordered_json::array();
+  for (const PlateConsistency& t : c.consistency) {
+    j["consistency"].push_back({{"plate", t.plate_id}, {"F", t.f_statistic}, {"k", t.k}, {"p_value", t.p_value},
+                                {"rejected", t.rejected}});
+  }
+  return j;
+}
+
+}  // namespace
+
+PrintedCamera ToPrinted(const StellarCamera& values, const StellarCamera& sigmas) {
+  const StellarCamera p = StellarCameraToPrinted(values);
+  PrintedCamera out;
+  for (int i = 0; i < kStellarCameraParams; ++i) out.value[i] = p[i], out.sigma[i] = sigmas[i];
+  for (int i = 0; i < 3; ++i) out.value[i] *= 1e3, out.sigma[i] *= 1e3;
+  out.value[3] = 1e3 * (p[3] + p[1]);  // from the reseau centre (xp's sigma is ~1e-3 of xs')
+  out.value[4] = 1e3 * (p[4] + p[2]);
+  out.sigma[3] *= 1e3;
+  out.sigma[4] *= 1e3;
+  out.value[10] *= kRadToDeg;
+  out.sigma[10] *= kRadToDeg;
+  return out;
+}
+
+std::string FormatStellarJson(const StellarJob& job, const StellarJobResult& result) {
+  ordered_json j;
+  j["title"] = job.title;
+  j["adjustment"] = "stellar calibration (seed 001), docs/stellar.md";
+  j["camera"] = job.camera.name;
+  j["frames"] = "plate_frame: x right, y up, xs/ys from the principal point, Phi_T rad; seed001_printed_frame: "
+                "left-handed (y down), um, xs/ys from the reseau centre, Phi_T deg";
+  j["catalog"] = {{"path", job.catalog_path}, {"magnitude_limit", job.magnitude_limit},
+                  {"sigma_arcsec", job.catalog_sigma_arcsec}, {"stars", result.catalog.size()}};
+  j["plates"] = ordered_json::array();
+  for (size_t i = 0; i < result.singles.size(); ++i) j["plates"].push_back(PlateJson(result.singles[i], result.identification[i]));
+  j["combinations"] = ordered_json::array();
+  for (const StellarCombination& c : result.combinations) j["combinations"].push_back(CombinationJson(c));
+  return j.dump(2) + "\n";
+}
+
+std::string FormatStellarResidualsCsv(const StellarJobResult& result) {
+  std::string out = "plate,image,star,status,vx_um,vy_um,normalized_x,normalized_y,origin,reason\n";
+  for (const StellarPlateResult& s : result.singles) {
+    for (const ObservationResidual& r : s.adjustment.residuals) {
+      const size_t space = r.item.find(' ');
+      const std::string image = r.item.substr(0, space);
+      std::string star = space == std::string::npos ? "" : r.item.substr(space + 1);
+      if (star.size() >= 2 && star.front() == '(') star = star.substr(1, star.size() - 2);
+      out += fmt::format("{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{}\n", s.plate_id, image, star,
+                         r.status == ObservationStatus::kUsed ? "used" : "rejected", 1e3 * r.residual[0],
+                         1e3 * r.residual[1], r.normalized[0], r.normalized[1], r.origin, r.reason);
+    }
+  }
+  return out;
+}
+
+std::string FormatIdentificationCsv(const StellarJobResult& result) {
+  std::string out = "plate,star_key,catalog_key,status\n";
+  for (size_t i = 0; i < result.identification.size(); ++i) {
+    if (!result.identification[i]) continue;
+    const IdentificationResult& r = *result.identification[i];
+    const std::string& plate = result.singles[i].plate_id;
+    for (const auto& [key, id] : r.catalog_id) out += fmt::format("{},{},{},identified\n", plate, key, id);
+    for (const std::string& key : r.unknown) {
+      const bool ambiguous = std::find(r.ambiguous.begin(), r.ambiguous.end(), key) != r.ambiguous.end();
+      out += fmt::format("{},{},,{}\n", plate, key, ambiguous ? "ambiguous" : "unknown");
+    }
+  }
+  return out;
+}
+
+CameraDefinition StellarCameraDefinition(const StellarJob& job, const StellarJobResult& result) {
+  const bool combined = !result.combinations.empty();
+  const StellarCamera& values = combined ? result.combinations.back().camera : result.singles.front().camera;
+  const StellarCamera& sigmas = combined ? result.combinations.back().camera_sigma : result.singles.front().camera_sigma;
+  const PrintedCamera p = ToPrinted(values, sigmas);
+  CameraDefinition d = job.camera;
+  d.description = "calibrated by platemeter's stellar calibration (seed 001) from " + job.camera.name;
+  d.source = job.title + (combined ? "; " + result.combinations.back().name : "; plate " + result.singles.front().plate_id);
+  d.nominal_principal_distance_mm = values[0];
+  LensCalibration lens;
+  lens.model = "orbigon-11";
+  lens.source = d.source + " (seed 001's printed, left-handed frame, as the builtin orbigon)";
+  lens.principal_distance_mm = p.value[0] * 1e-3;
+  lens.principal_point_x_mm = p.value[1] * 1e-3;
+  lens.principal_point_y_mm = p.value[2] * 1e-3;
+  const char* keys[] = {"xs_um", "ys_um", "K1_per_m2", "K2_per_m4", "K3_per_m6", "K4_per_m", "K5_per_m3", "Phi_T_deg"};
+  for (int i = 3; i < kStellarCameraParams; ++i) {
+    lens.coefficients[keys[i - 3]] = p.value[i];
+    if (sigmas[i] > 0) lens.sigmas[keys[i - 3]] = p.sigma[i];
+  }
+  const char* struct_keys[] = {"principal_distance_mm", "principal_point_x_mm", "principal_point_y_mm"};
+  for (int i = 0; i < 3; ++i) {
+    if (sigmas[i] > 0) lens.sigmas[struct_keys[i]] = sigmas[i];
+  }
+  d.lens = lens;
+  return d;
+}
+
+std::vector<std::string> WriteStellarOutputs(const std::string& dir, const StellarJob& job,
+                                             const StellarJobResult& result) {
+  // Every text is formatted before the first file is written: a failure leaves no partial set.
+  std::vector<std::pair<std::string, std::string>> files;
+  files.emplace_back("calibration.json", FormatStellarJson(job, result));
+  files.emplace_back("report.md", FormatStellarMarkdown(job, result));
+  files.emplace_back("residuals.csv", FormatStellarResidualsCsv(result));
+  files.emplace_back("identification.csv", FormatIdentificationCsv(result));
+  files.emplace_back("camera-" + job.camera.name + "-stellar.toml",
+                     "# " + job.title + "\n# Format: docs/definitions.md\n\n" + ToToml(StellarCameraDefinition(job, result)));
+  return WriteOutputFiles(dir, files);
+}
+
+}  // namespace platemeter

@@ -1,0 +1,117 @@
+// report.md of a stellar calibration job: seed 001 Tables 2 and 3 (stellar_report.h).
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "platemeter/calib/stellar_report.h"
+
+namespace platemeter {
+namespace {
+
+constexpr double kRadToArcsec = 180.0 * 3600.0 / M_PI;
+
+// Seed 001 prints K as mantissa and power of ten ("+3.1602-1"); we print 5 significant digits.
+std::string Value(int i, double v) { return i >= 5 && i <= 9 ? fmt::format("{:+.4e}", v) : fmt::format("{:.2f}", v); }
+std::string Sigma(int i, double s) { return i >= 5 && i <= 9 ? fmt::format("{:.2e}", s) : fmt::format("{:.2f}", s); }
+
+void Table2(const StellarJobResult& result, std::string* md) {
+  *md += "## Single-plate calibrations (seed 001 Table 2)\n\n";
+  *md += "Seed 001's printed frame: origin at the reseau centre, left-handed as viewed on the focal plane (y down); "
+         "xs, ys from the reseau centre; K1..K5 with d in metres; values +- standard errors.\n\n";
+  *md += "| |";
+  for (const auto& s : result.singles) *md += " " + s.plate_id + " |";
+  *md += "\n|---|";
+  for (size_t k = 0; k < result.singles.size(); ++k) *md += "---|";
+  *md += "\n";
+  auto row = [&](const std::string& name, auto cell) {
+    *md += "| " + name + " |";
+    for (const auto& s : result.singles) *md += " " + cell(s) + " |";
+    *md += "\n";
+  };
+  row("group", [](const StellarPlateResult& s) { return s.group; });
+  row("catalog stars", [](const StellarPlateResult& s) { return std::to_string(s.catalog_stars); });
+  row("unknown stars", [](const StellarPlateResult& s) { return std::to_string(s.unknown_stars); });
+  row("star images", [](const StellarPlateResult& s) { return std::to_string(s.images); });
+  row("rejected images", [](const StellarPlateResult& s) { return std::to_string(s.rejected_images); });
+  row("epsilon (sec arc)", [](const StellarPlateResult& s) {
+    return fmt::format("{:+.2f} +- {:.2f}", -s.epsilon_rad * kRadToArcsec, s.epsilon_sigma_rad * kRadToArcsec);
+  });
+  row("Cx (um)", [](const StellarPlateResult& s) { return fmt::format("{:.2f} +- {:.2f}", 1e3 * s.cx_mm, 1e3 * s.cx_sigma_mm); });
+  row("Cy (um)", [](const StellarPlateResult& s) { return fmt::format("{:.2f} +- {:.2f}", 1e3 * s.cy_mm, 1e3 * s.cy_sigma_mm); });
+  for (int i = 1; i < kStellarCameraParams; ++i) {
+    row(kPrintedCameraNames[i], [i](const StellarPlateResult& s) {
+      const PrintedCamera p = ToPrinted(s.camera, s.camera_sigma);
+      return Value(i, p.value[i]) + " +- " + Sigma(i, p.sigma[i]);
+    });
+  }
+  row("m_p (um)", [](const StellarPlateResult& s) { return fmt::format("{:.2f}", s.m_p_um); });
+  row("m_o", [](const StellarPlateResult& s) { return fmt::format("{:.3f}", s.m_o); });
+  row("degrees of freedom", [](const StellarPlateResult& s) { return fmt::format("{:.0f}", s.adjustment.dof); });
+  row("orientation sets", [](const StellarPlateResult& s) { return std::to_string(s.orientation_sets.size()); });
+  row("largest camera motion (sec arc)", [](const StellarPlateResult& s) { return fmt::format("{:.2f}", s.largest_motion_arcsec); });
+  *md += "\n";
+}
+
+void Table3(const StellarJobResult& result, std::string* md) {
+  if (result.combinations.empty()) return;
+  *md += "## Multiple-plate calibrations (seed 001 Table 3)\n\n";
+  *md += "Pope's generalized weighted mean, relinearized until it is the simultaneous solution (docs/stellar.md).\n\n";
+  *md += "| |";
+  for (const auto& c : result.combinations) *md += " " + c.name + " | s.e. |";
+  *md += "\n|---|";
+  for (size_t k = 0; k < result.combinations.size(); ++k) *md += "---|---|";
+  *md += "\n";
+  for (int i = 0; i < kStellarCameraParams; ++i) {
+    *md += std::string("| ") + kPrintedCameraNames[i] + " |";
+    for (const auto& c : result.combinations) {
+      const PrintedCamera p = ToPrinted(c.camera, c.camera_sigma);
+      *md += " " + Value(i, p.value[i]) + " | " + Sigma(i, p.sigma[i]) + " |";
+    }
+    *md += "\n";
+  }
+  auto row = [&](const std::string& name, auto cell) {
+    *md += "| " + name + " |";
+    for (const auto& c : result.combinations) *md += " " + cell(c) + " | |";
+    *md += "\n";
+  };
+  row("m_o", [](const StellarCombination& c) { return fmt::format("{:.3f}", c.m_0); });
+  row("v (dof)", [](const StellarCombination& c) { return fmt::format("{:.0f}", c.dof); });
+  row("m_p (um)", [](const StellarCombination& c) { return fmt::format("{:.2f}", c.m_p_um); });
+  row("m_p^a (um)", [](const StellarCombination& c) { return fmt::format("{:.2f}", c.m_p_after_um); });
+  row("plates", [](const StellarCombination& c) {
+    std::string s;
+    for (const auto& id : c.plate_ids) s += (s.empty() ? "" : ", ") + id;
+    return s;
+  });
+  *md += "\nConsistency of each plate with its combination (F test of the camera difference):\n\n";
+  for (const auto& c : result.combinations) {
+    for (const PlateConsistency& t : c.consistency) {
+      *md += fmt::format("- {}: plate {}: F = {:.2f} with {} and {:.0f} dof, p = {:.3f}{}\n", c.name, t.plate_id,
+                         t.f_statistic, t.k, c.dof, t.p_value, t.rejected ? " -- INCONSISTENT" : "");
+    }
+  }
+  *md += "\n";
+}
+
+}  // namespace
+
+std::string FormatStellarMarkdown(const StellarJob& job, const StellarJobResult& result) {
+  std::string md = "# " + job.title + "\n\n";
+  md += fmt::format("Camera {}; catalog {} to V = {:.1f} ({} stars, position sigma {:.2f}\"); {} plate(s).\n\n",
+                    job.camera.name, job.catalog_path, job.magnitude_limit, result.catalog.size(),
+                    job.catalog_sigma_arcsec, result.singles.size());
+  for (size_t i = 0; i < result.identification.size(); ++i) {
+    if (!result.identification[i]) continue;
+    const IdentificationResult& r = *result.identification[i];
+    md += fmt::format("- plate {}: {} stars identified, {} unknown ({} ambiguous); false-alarm probability {:.1e}; "
+                      "rms {:.1f}\"\n",
+                      result.singles[i].plate_id, r.catalog_id.size(), r.unknown.size(), r.ambiguous.size(),
+                      r.false_alarm_probability, r.rms_arcsec);
+  }
+  md += "\n";
+  Table2(result, &md);
+  Table3(result, &md);
+  return md;
+}
+
+}  // namespace platemeter

@@ -1,0 +1,73 @@
+// platemeter calibrate stellar (cmd_calibrate_stellar.h).
+#include "cmd_calibrate_stellar.h"
+
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "platemeter/calib/stellar_job.h"
+#include "platemeter/calib/stellar_report.h"
+#include "platemeter/grids/registry.h"
+
+namespace platemeter::cli {
+namespace {
+
+struct StellarCommandOptions {
+  std::string job;
+  std::string output_dir;
+  bool quiet = false;
+};
+
+void PrintCamera(const std::string& what, const StellarCamera& values, const StellarCamera& sigmas) {
+  const PrintedCamera p = ToPrinted(values, sigmas);
+  std::cout << what << " (seed 001's printed frame):";
+  for (int i = 0; i < kStellarCameraParams; ++i)
+    std::cout << fmt::format(" {} = {:.6g} +- {:.3g};", kPrintedCameraNames[i], p.value[i], p.sigma[i]);
+  std::cout << '\n';
+}
+
+void RunStellar(const StellarCommandOptions& o, const GlobalOptions& global) {
+  const StellarJob job = ReadStellarJob(o.job, DefinitionRegistry::Load(global.definition_files));
+  AdjustmentProgress progress;
+  if (!o.quiet) {
+    progress = [last = std::string()](const std::string& stage, double) mutable {
+      if (stage != last) std::cerr << "calibrate stellar: " << stage << "...\n";
+      last = stage;
+    };
+  }
+  const StellarJobResult result = RunStellarJob(job, progress);
+  const std::vector<std::string> written = WriteStellarOutputs(o.output_dir, job, result);
+  for (const StellarPlateResult& s : result.singles) {
+    std::cout << fmt::format("plate {}: {} images of {} catalog and {} unknown stars, {} rejected; m_o = {:.3f} with "
+                             "{:.0f} degrees of freedom, m_p = {:.2f} um\n",
+                             s.plate_id, s.images, s.catalog_stars, s.unknown_stars, s.rejected_images, s.m_o,
+                             s.adjustment.dof, s.m_p_um);
+  }
+  for (const StellarCombination& c : result.combinations) {
+    std::cout << fmt::format("combination {}: m_0 = {:.3f} with {:.0f} degrees of freedom\n", c.name, c.m_0, c.dof);
+  }
+  if (!result.combinations.empty()) {
+    PrintCamera("camera (" + result.combinations.back().name + ")", result.combinations.back().camera,
+                result.combinations.back().camera_sigma);
+  } else {
+    PrintCamera("camera (plate " + result.singles.front().plate_id + ")", result.singles.front().camera,
+                result.singles.front().camera_sigma);
+  }
+  for (const std::string& path : written) std::cout << "wrote " << path << '\n';
+}
+
+}  // namespace
+
+void RegisterCalibrateStellar(CLI::App* calibrate, GlobalOptions& global) {
+  auto o = std::make_shared<StellarCommandOptions>();
+  auto* stellar = calibrate->add_subcommand(
+      "stellar", "stellar calibration of star plates (seed 001): identification, per-plate adjustment, weighted mean "
+                 "(docs/stellar-job.md)");
+  stellar->add_option("JOB", o->job, "stellar job file (TOML)")->required()->check(CLI::ExistingFile);
+  stellar->add_option("-o,--output", o->output_dir, "output folder")->required();
+  stellar->add_flag("--quiet", o->quiet, "no progress on stderr");
+  stellar->callback([o, &global] { RunStellar(*o, global); });
+}
+
+}  // namespace platemeter::cli

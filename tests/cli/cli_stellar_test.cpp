@@ -1,0 +1,122 @@
+// platemeter calibrate stellar end to end: two simulated Orbigon plates (North
+// and South, two dates) written as measurement files whose stars carry only
+// detector keys, identified, adjusted and combined by the binary; the outputs
+// read back and checked against the simulator's truth.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "platemeter/grids/registry.h"
+#include "platemeter/samples/stellar_plates.h"
+#include "support/stellar_plates.h"
+#include "support/test_support.h"
+
+namespace platemeter {
+namespace {
+
+using testing::RunPlatemeter;
+
+void WriteText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+constexpr const char* kSite = "[site]\nlatitude_deg = 39.03\nlongitude_deg = -76.93\nheight_m = 50\n";
+
+struct TwoPlateJob {
+  std::string job;
+  std::map<std::string, std::map<std::string, std::string>> truth_of;  // plate -> key -> catalog key
+  StellarCamera truth{};
+};
+
+TwoPlateJob WriteTwoPlateJob(const testing::TempDir& dir) {
+  const DefinitionRegistry registry;
+  TwoPlateJob out;
+  std::string plates;
+  for (const auto& [id, start, roll, seed] : {std::tuple{"N", "1972-05-12T05:30:00Z", 0.0, 21},
+                                              std::tuple{"S", "1972-04-09T06:10:00Z", 180.0, 22}}) {
+    sim::StellarPlateSimulation s = testing::BeltsvillePlate(id, start, roll);
+    s.field.place.pressure_hpa = 1013.25 * std::exp(-50.0 / (29.3 * (273.15 + 10.0)));  // the job's default
+    const sim::StellarTruthPlate truth = sim::SimulateStellarTruth(s, registry.Camera("orbigon"));
+    out.truth = truth.camera;
+    const sim::NoisyStellarPlate noisy = sim::Noisy(truth, {.seed = static_cast<uint64_t>(seed)});
+    const std::string path = dir.file(std::string(id) + ".csv");
+    out.truth_of[id] = sim::WriteStellarMeasurementFile(noisy.plate, path, true);
+    // The pointing given 4 deg off the zenith.
+    plates += "[[plate]]\nid = \"" + std::string(id) + "\"\nmeasurements = \"" + path +
+              "\"\naxis_azimuth_deg = 120\naxis_altitude_deg = 86\n";
+  }
+  out.job = dir.file("job.toml");
+  WriteText(out.job, "title = \"two simulated Orbigon plates\"\ncamera = \"orbigon\"\n" + std::string(kSite) + plates);
+  return out;
+}
+
+TEST(CliStellar, IdentifiesAdjustsAndCombinesTwoPlates) {
+  testing::TempDir dir;
+  const TwoPlateJob job = WriteTwoPlateJob(dir);
+  const std::string out = dir.file("out");
+  const auto run = RunPlatemeter("calibrate stellar '" + job.job + "' -o '" + out + "'");
+  ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+  std::printf("%s", run.out.c_str());
+  for (const char* name : {"calibration.json", "report.md", "residuals.csv", "identification.csv",
+                           "camera-orbigon-stellar.toml"})
+    EXPECT_TRUE(std::filesystem::exists(out + "/" + name)) << name;
+  // Every identified star is the simulator's.
+  std::istringstream identification(testing::ReadTextFile(out + "/identification.csv"));
+  std::string line;
+  int identified = 0, wrong = 0;
+  std::getline(identification, line);
+  while (std::getline(identification, line)) {
+    std::vector<std::string> f;
+    std::stringstream fields(line);
+    for (std::string v; std::getline(fields, v, ',');) f.push_back(v);
+    if (f.size() < 4 || f[3] != "identified") continue;
+    ++identified;
+    wrong += job.truth_of.at(f[0]).at(f[1]) == f[2] ? 0 : 1;
+  }
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GT(identified, 1000);
+  // The combined camera within 3 sigma of the true lens.
+  const nlohmann::json j = nlohmann::json::parse(testing::ReadTextFile(out + "/calibration.json"));
+  ASSERT_EQ(j["combinations"].size(), 1u);
+  const auto& camera = j["combinations"][0]["camera"]["plate_frame"];
+  for (int i = 0; i < kStellarCameraParams; ++i) {
+    const auto& p = camera[kStellarCameraParamNames[i]];
+    double difference = p["value"].get<double>() - job.truth[i];
+    if (i == 10) difference = std::remainder(difference, 2 * M_PI);
+    EXPECT_LT(std::abs(difference), 3.0 * p["sigma"].get<double>()) << kStellarCameraParamNames[i];
+  }
+  EXPECT_NEAR(j["combinations"][0]["m_0"].get<double>(), 1.0, 0.1);
+  // The calibrated camera is a definition platemeter loads.
+  const auto show = RunPlatemeter("--definitions '" + out + "/camera-orbigon-stellar.toml' cameras show orbigon");
+  EXPECT_EQ(show.exit_code, 0) << show.err;
+}
+
+TEST(CliStellar, BadJobsAreOneLineErrors) {
+  testing::TempDir dir;
+  const std::string out = dir.file("out");
+  const std::string measurements = dir.file("m.csv");
+  WriteText(measurements, "x\n");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"camera = \"orbigon\"\nfoo = 1\n" + std::string(kSite), "unknown key 'foo'"},
+      {"camera = \"nosuch\"\n" + std::string(kSite), "unknown camera 'nosuch'"},
+      {"camera = \"orbigon\"\n", "[site]"},
+      {"camera = \"orbigon\"\norientation_sets = 4\n" + std::string(kSite), "orientation_sets"},
+      {"camera = \"orbigon\"\n" + std::string(kSite) + "[[plate]]\nid = \"A\"\n", "needs 'id' and 'measurements'"},
+  };
+  for (const auto& [text, reason] : cases) {
+    const std::string job = dir.file("bad.toml");
+    WriteText(job, text);
+    const auto run = RunPlatemeter("calibrate stellar '" + job + "' -o '" + out + "'");
+    EXPECT_EQ(run.exit_code, 1) << text;
+    EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
+    EXPECT_NE(run.err.find(reason), std::string::npos) << run.err;
+    EXPECT_FALSE(std::filesystem::exists(out + "/calibration.json"));
+  }
+}
+
+}  // namespace
+}  // namespace platemeter

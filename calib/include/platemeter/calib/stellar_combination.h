@@ -12,12 +12,14 @@
 // simultaneous least squares solution". That holds for a linear model; the
 // image equations are not linear, and Pope's one step from the plates' own
 // solutions differs from the simultaneous solution by second-order terms
-// (reported as one_step_offset_sigma). So the combination goes on: each plate
-// is re-solved with the camera held at the combined values and its reduced
-// normal equations (matrix and right-hand side) are formed there; their sum
-// gives a Gauss-Newton step of the camera; repeated until the step is below
-// 1e-12 sigma. The result IS the simultaneous solution (same stationary point,
-// same reduced normal matrix), at the cost of a few single-plate solves.
+// (reported as one_step_offset_sigma). So the combination goes on from there:
+// each plate's normal equations are formed at the current camera and the
+// plate's own current parameters and reduced to the camera (matrix and
+// right-hand side); their sum gives a Gauss-Newton step of the camera, and
+// each plate's orientation sets, deformation and stars follow by
+// back-substitution -- no plate is adjusted again. Repeated until the step is
+// below 1e-10 sigma. The result IS the simultaneous solution (same stationary
+// point, same reduced normal matrix).
 //
 // Independence. Like seed 001, each plate carries its own stars' catalog
 // corrections: the catalog error of a star seen on two plates is treated as
@@ -54,7 +56,7 @@ struct StellarCombination {
   double m_p_um = 0.0;                // pooled standard error of an image of unit weight before combination
   double m_p_after_um = 0.0;          // the same at the combined camera (seed 001's m_p^a)
   double one_step_offset_sigma = 0.0; // largest |Pope's one-step mean - final| / sigma
-  int relinearizations = 0;
+  int relinearizations = 0;           // Gauss-Newton steps taken
   std::vector<PlateConsistency> consistency;
 };
 

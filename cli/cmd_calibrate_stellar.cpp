@@ -47,12 +47,29 @@ void RunStellar(const StellarCommandOptions& o, const GlobalOptions& global) {
   for (const StellarCombination& c : result.combinations) {
     std::cout << fmt::format("combination {}: m_0 = {:.3f} with {:.0f} degrees of freedom\n", c.name, c.m_0, c.dof);
   }
-  if (!result.combinations.empty()) {
-    PrintCamera("camera (" + result.combinations.back().name + ")", result.combinations.back().camera,
-                result.combinations.back().camera_sigma);
-  } else {
-    PrintCamera("camera (plate " + result.singles.front().plate_id + ")", result.singles.front().camera,
-                result.singles.front().camera_sigma);
+  for (size_t k = 0; k < job.cameras.size(); ++k) {
+    int combination = -1;
+    for (size_t c = 0; c < result.combinations.size(); ++c) {
+      if (result.combination_camera[c] == static_cast<int>(k)) combination = static_cast<int>(c);
+    }
+    if (combination >= 0) {
+      const StellarCombination& c = result.combinations[combination];
+      PrintCamera("camera " + job.cameras[k].name + " (" + c.name + ")", c.camera, c.camera_sigma);
+      continue;
+    }
+    for (size_t i = 0; i < result.singles.size(); ++i) {
+      if (job.plates[i].camera != static_cast<int>(k)) continue;
+      PrintCamera("camera " + job.cameras[k].name + " (plate " + result.singles[i].plate_id + ")",
+                  result.singles[i].camera, result.singles[i].camera_sigma);
+      break;
+    }
+  }
+  if (result.interlock) {
+    const StellarInterlockResult& r = *result.interlock;
+    std::cout << fmt::format("cameras exposed together ({} exposures): sigma0 = {:.3f} with {:.0f} degrees of freedom\n",
+                             r.exposures, r.adjustment.sigma0, r.adjustment.dof);
+    for (const CameraInterlockResult& i : r.interlocks)
+      std::cout << "interlock " << i.from << " -> " << i.to << ": " << i.angles.summary << '\n';
   }
   for (const std::string& path : written) std::cout << "wrote " << path << '\n';
 }
@@ -62,8 +79,8 @@ void RunStellar(const StellarCommandOptions& o, const GlobalOptions& global) {
 void RegisterCalibrateStellar(CLI::App* calibrate, GlobalOptions& global) {
   auto o = std::make_shared<StellarCommandOptions>();
   auto* stellar = calibrate->add_subcommand(
-      "stellar", "stellar calibration of star plates (seed 001): identification, per-plate adjustment, weighted mean "
-                 "(docs/stellar-job.md)");
+      "stellar", "stellar calibration of star plates (seed 001): identification, per-plate adjustment, weighted mean, "
+                 "cameras exposed together (seed 004) (docs/stellar-job.md)");
   stellar->add_option("JOB", o->job, "stellar job file (TOML)")->required()->check(CLI::ExistingFile);
   stellar->add_option("-o,--output", o->output_dir, "output folder")->required();
   stellar->add_flag("--quiet", o->quiet, "no progress on stderr");

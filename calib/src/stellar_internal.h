@@ -42,14 +42,19 @@ struct StellarImageEquation {
   template <typename T>
   bool operator()(const T* camera, const T* orientation, const T* deformation, const T* star,
                   T* residual_mm) const {
+    T r[9];
+    OmegaPhiKappaMatrixT(orientation[0], orientation[1], orientation[2], r);
+    return Residual(camera, r, deformation, star, residual_mm);
+  }
+  // The same with the camera's rotation r (row-major) after m0 given.
+  template <typename T>
+  bool Residual(const T* camera, const T* r, const T* deformation, const T* star, T* residual_mm) const {
     T d[3];
     for (int i = 0; i < 3; ++i) {
       d[i] = T(direction.enu[i]) + T(direction.d_east[i]) * star[0] + T(direction.d_north[i]) * star[1];
     }
     T v[3];
     for (int i = 0; i < 3; ++i) v[i] = T(m0(i, 0)) * d[0] + T(m0(i, 1)) * d[1] + T(m0(i, 2)) * d[2];
-    T r[9];
-    OmegaPhiKappaMatrixT(orientation[0], orientation[1], orientation[2], r);
     const T m = r[0] * v[0] + r[1] * v[1] + r[2] * v[2];
     const T n = r[3] * v[0] + r[4] * v[1] + r[5] * v[2];
     const T q = r[6] * v[0] + r[7] * v[1] + r[8] * v[2];
@@ -68,11 +73,37 @@ struct StellarImageEquation {
   }
 };
 
+// An image of a camera interlocked with the reference camera of its exposure
+// (stellar_interlock.h): m0 and the orientation set are the reference plate's,
+// and the interlock's rotation M = R3(kappa) R2(phi) R1(omega) follows them.
+// Blocks: camera, reference orientation set, interlock (omega, phi, kappa
+// rad), deformation, star.
+struct InterlockedImageEquation {
+  StellarImageEquation image;
+
+  template <typename T>
+  bool operator()(const T* camera, const T* orientation, const T* interlock, const T* deformation, const T* star,
+                  T* residual_mm) const {
+    T a[9], b[9], r[9];
+    OmegaPhiKappaMatrixT(interlock[0], interlock[1], interlock[2], a);
+    OmegaPhiKappaMatrixT(orientation[0], orientation[1], orientation[2], b);
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) r[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+    }
+    return image.Residual(camera, r, deformation, star, residual_mm);
+  }
+  static ceres::CostFunction* Create(const StellarImageEquation& equation) {
+    return new ceres::AutoDiffCostFunction<InterlockedImageEquation, 2, kStellarCameraParams, 3, 3, 2, 2>(
+        new InterlockedImageEquation{equation});
+  }
+};
+
 // One plate prepared for adjustment: every usable image with its direction,
 // its orientation set and its star.
 struct PreparedImage {
   int source = -1;            // index in StellarPlate::images
   int set = 0;                // orientation set 0..k-1
+  double time_s = 0.0;        // mid-time, s after the plate's first image
   int star = -1;              // index in PreparedPlate::stars
   StellarImageEquation equation;
 };
@@ -86,6 +117,8 @@ struct PreparedPlate {
   std::vector<PreparedStar> stars;
   std::vector<Eigen::Matrix3d> set_m0;        // per orientation set
   std::vector<std::pair<double, double>> set_span_s;  // per set: first and last image, s after the first
+  calib::UtcInstant first_time;               // the plate's first image
+  double span_s = 0.0;                        // from the first to the last image
   double unit_sigma_um = 0.0;
 };
 
@@ -105,6 +138,15 @@ struct PlateBlocks {
 };
 PlateBlocks AddPlateToProblem(const StellarPlate& plate, const PreparedPlate& prepared, const StellarOptions& options,
                               int camera, AdjustmentProblem* problem);
+// A plate of an interlocked camera (stellar_interlock.h): its images take the
+// reference plate's orientation-set blocks `reference.sets` and the
+// `interlock` block; `prepared` must have been aligned (AlignToReference).
+PlateBlocks AddInterlockedPlateToProblem(const StellarPlate& plate, const PreparedPlate& prepared,
+                                         const StellarOptions& options, int camera, const PlateBlocks& reference,
+                                         int interlock, AdjustmentProblem* problem);
+// Gives a plate exposed with `reference` the reference's time split into
+// orientation sets and its starting rotations (each image's m0).
+void AlignToReference(const PreparedPlate& reference, PreparedPlate* plate);
 // The camera block with its states (options.camera_states).
 int AddCameraBlock(const std::string& label, const StellarCamera& values, const StellarOptions& options,
                    AdjustmentProblem* problem);

@@ -74,9 +74,22 @@ std::vector<StarImageObservation> ReadPlateImages(const std::string& path, const
   return out;
 }
 
+// A camera definition by name: its index in job->cameras (added when new).
+int CameraIndex(const JobReader& r, const toml::node& node, const std::string& key, const DefinitionRegistry& registry,
+                StellarJob* job) {
+  const std::string name = r.String(node, key);
+  for (size_t k = 0; k < job->cameras.size(); ++k) {
+    if (job->cameras[k].name == name) return static_cast<int>(k);
+  }
+  const CameraDefinition* definition = registry.FindCamera(name);
+  if (!definition) r.Fail(&node, "unknown camera '" + name + "' (known: " + Join(registry.CameraNames()) + ")");
+  job->cameras.push_back(*definition);
+  return static_cast<int>(job->cameras.size()) - 1;
+}
+
 StellarJobPlate ReadPlate(const JobReader& r, const toml::table& t, const calib::ApparentPlaceOptions& site,
-                          const std::vector<PointKind>& kinds) {
-  r.CheckKeys(t, "plate.", {"id", "group", "measurements", "axis_azimuth_deg", "axis_altitude_deg", "ra_deg", "dec_deg",
+                          const std::vector<PointKind>& kinds, const DefinitionRegistry& registry, StellarJob* job) {
+  r.CheckKeys(t, "plate.", {"id", "group", "measurements", "camera", "exposure", "axis_azimuth_deg", "axis_altitude_deg", "ra_deg", "dec_deg",
                             "pressure_hpa", "temperature_degC", "relative_humidity", "wavelength_um",
                             "ut1_minus_utc_s", "refraction"});
   StellarJobPlate p;
@@ -85,6 +98,8 @@ StellarJobPlate ReadPlate(const JobReader& r, const toml::table& t, const calib:
   if (!id || !measurements) r.Fail(&t, "a [[plate]] needs 'id' and 'measurements'");
   p.plate.id = r.String(*id, "plate.id");
   if (const toml::node* n = t.get("group")) p.plate.group = r.String(*n, "plate.group");
+  if (const toml::node* n = t.get("camera")) p.camera = CameraIndex(r, *n, "plate.camera", registry, job);
+  if (const toml::node* n = t.get("exposure")) p.exposure = r.String(*n, "plate.exposure");
   p.plate.place = site;
   ReadPlace(r, t, "plate.", &p.plate.place, false);
   if (const toml::node* n = t.get("axis_azimuth_deg")) p.axis_azimuth_deg = r.Number(*n, "plate.axis_azimuth_deg", -360, 360);
@@ -136,10 +151,8 @@ StellarJob ReadStellarJob(const std::string& path, const DefinitionRegistry& reg
   job.path = path;
   const toml::node* camera = root.get("camera");
   if (!camera) r.Fail(nullptr, "the job needs 'camera' (a camera definition, `platemeter cameras list`)");
-  const std::string camera_name = r.String(*camera, "camera");
-  const CameraDefinition* definition = registry.FindCamera(camera_name);
-  if (!definition) r.Fail(camera, "unknown camera '" + camera_name + "' (known: " + Join(registry.CameraNames()) + ")");
-  job.camera = *definition;
+  CameraIndex(r, *camera, "camera", registry, &job);
+  const std::string camera_name = job.cameras[0].name;
   job.title = root.get("title") ? r.String(*root.get("title"), "title") : "Stellar calibration: " + camera_name;
   job.catalog_path = root.get("catalog") ? r.Path(r.String(*root.get("catalog"), "catalog"))
                                          : calib::DefaultStarCatalogPath();
@@ -170,9 +183,11 @@ StellarJob ReadStellarJob(const std::string& path, const DefinitionRegistry& reg
   const toml::array* plates = r.Tables(root, "plate");
   if (!plates || plates->empty()) r.Fail(nullptr, "the job needs at least one [[plate]]");
   for (const toml::node& node : *plates) {
-    StellarJobPlate plate = ReadPlate(r, *node.as_table(), site, kinds);
+    StellarJobPlate plate = ReadPlate(r, *node.as_table(), site, kinds, registry, &job);
     for (const StellarJobPlate& other : job.plates) {
       if (other.plate.id == plate.plate.id) r.Fail(&node, "plate id '" + plate.plate.id + "' is used twice");
+      if (!plate.exposure.empty() && other.exposure == plate.exposure && other.camera == plate.camera)
+        r.Fail(&node, "exposure '" + plate.exposure + "' has two plates of camera " + job.cameras[plate.camera].name);
     }
     job.plates.push_back(std::move(plate));
   }

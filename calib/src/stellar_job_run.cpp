@@ -61,13 +61,70 @@ StellarCamera InitialCamera(const CameraDefinition& camera, bool* printed_left_h
   throw Error("camera " + camera.name, "has neither an orbigon-11 lens nor a nominal principal distance to start from");
 }
 
+
+// The joint adjustment of the cameras over the exposures that show camera 0
+// and at least one other camera; nullopt when there is none.
+std::optional<StellarInterlockResult> RunInterlock(const StellarJob& job, const StellarJobResult& out,
+                                                   const AdjustmentProgress& progress) {
+  const size_t cameras = job.cameras.size();
+  std::map<std::string, InterlockExposure> by_id;
+  for (size_t i = 0; i < job.plates.size(); ++i) {
+    if (job.plates[i].exposure.empty()) continue;
+    InterlockExposure& e = by_id[job.plates[i].exposure];
+    e.id = job.plates[i].exposure;
+    e.plates.resize(cameras);
+    e.plates[job.plates[i].camera] = out.plates[i];
+  }
+  std::vector<InterlockExposure> exposures;
+  for (auto& [id, e] : by_id) {
+    int others = 0;
+    for (size_t k = 1; k < cameras; ++k) others += e.plates[k].images.empty() ? 0 : 1;
+    if (!e.plates[0].images.empty() && others > 0) exposures.push_back(std::move(e));
+  }
+  if (exposures.empty()) return std::nullopt;
+  if (progress) progress("interlock", 0.0);
+  std::vector<std::string> names;
+  for (const CameraDefinition& c : job.cameras) names.push_back(c.name);
+  return RunStellarInterlock(names, out.initial, exposures, out.catalog, job.options, progress);
+}
+
+void CombinePlates(const StellarJob& job, const AdjustmentProgress& progress, StellarJobResult* out) {
+  for (size_t camera = 0; camera < job.cameras.size(); ++camera) {
+    const std::string suffix = job.cameras.size() > 1 ? " of " + job.cameras[camera].name : "";
+    std::map<std::string, std::vector<int>> groups;
+    std::vector<int> all;
+    for (int i = 0; i < static_cast<int>(out->plates.size()); ++i) {
+      if (job.plates[i].camera != static_cast<int>(camera)) continue;
+      groups[out->plates[i].group].push_back(i);
+      all.push_back(i);
+    }
+    auto combine = [&](const std::string& name, const std::vector<int>& members) {
+      if (progress) progress("combination " + name, 0.0);
+      std::vector<StellarPlate> plates;
+      std::vector<StellarPlateResult> singles;
+      for (int i : members) plates.push_back(out->plates[i]), singles.push_back(out->singles[i]);
+      out->combinations.push_back(CombineStellarPlates(name, plates, singles, out->catalog, job.options));
+      out->combination_camera.push_back(static_cast<int>(camera));
+    };
+    for (const auto& [group, members] : groups) {
+      if (members.size() >= 2 && groups.size() > 1) combine((group.empty() ? "(no group)" : group) + suffix, members);
+    }
+    if (all.size() >= 2) combine("all plates" + suffix, all);
+  }
+}
+
 }  // namespace
 
 StellarJobResult RunStellarJob(const StellarJob& job, const AdjustmentProgress& progress) {
   StellarJobResult out;
-  out.initial = InitialCamera(job.camera, &out.printed_left_handed);
+  for (const CameraDefinition& camera : job.cameras) {
+    bool printed = false;
+    out.initial.push_back(InitialCamera(camera, &printed));
+    out.printed_left_handed.push_back(printed);
+  }
   out.catalog = LoadCatalog(job);
   for (const StellarJobPlate& p : job.plates) {
+    const StellarCamera& initial = out.initial[p.camera];
     StellarPlate plate = p.plate;
     std::optional<Eigen::Matrix3d> pointing;
     std::optional<IdentificationResult> identification;
@@ -75,31 +132,16 @@ StellarJobResult RunStellarJob(const StellarJob& job, const AdjustmentProgress& 
     for (const StarImageObservation& o : plate.images) all_known = all_known && out.catalog.count(o.star_id);
     if (job.identify && !all_known) {
       if (progress) progress("identification " + plate.id, 0.0);
-      identification = IdentifyPlate(job, p, out.catalog, out.initial, &plate);
+      identification = IdentifyPlate(job, p, out.catalog, initial, &plate);
       pointing = identification->camera_from_enu;
     }
     if (progress) progress("plate " + plate.id, 0.0);
-    out.singles.push_back(RunStellarPlate(plate, out.catalog, out.initial, job.options, pointing, progress));
+    out.singles.push_back(RunStellarPlate(plate, out.catalog, initial, job.options, pointing, progress));
     out.plates.push_back(std::move(plate));
     out.identification.push_back(std::move(identification));
   }
-  std::map<std::string, std::vector<int>> groups;
-  for (int i = 0; i < static_cast<int>(out.plates.size()); ++i) groups[out.plates[i].group].push_back(i);
-  auto combine = [&](const std::string& name, const std::vector<int>& members) {
-    if (progress) progress("combination " + name, 0.0);
-    std::vector<StellarPlate> plates;
-    std::vector<StellarPlateResult> singles;
-    for (int i : members) plates.push_back(out.plates[i]), singles.push_back(out.singles[i]);
-    out.combinations.push_back(CombineStellarPlates(name, plates, singles, out.catalog, job.options));
-  };
-  for (const auto& [group, members] : groups) {
-    if (members.size() >= 2 && groups.size() > 1) combine(group.empty() ? "(no group)" : group, members);
-  }
-  if (out.plates.size() >= 2) {
-    std::vector<int> all(out.plates.size());
-    for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
-    combine("all plates", all);
-  }
+  CombinePlates(job, progress, &out);
+  out.interlock = RunInterlock(job, out, progress);
   return out;
 }
 

@@ -68,6 +68,8 @@ PreparedPlate PreparePlate(const StellarPlate& plate, const StellarCatalog& cata
   for (const StarImageObservation& image : plate.images) span_s = std::max(span_s, SecondsBetween(first, image.mid_time));
 
   PreparedPlate out;
+  out.first_time = first;
+  out.span_s = span_s;
   double sum_sigma2 = 0.0;
   // Catalog stars first: their directions give the starting orientation.
   std::vector<const calib::CatalogStar*> stars;
@@ -143,6 +145,7 @@ PreparedPlate PreparePlate(const StellarPlate& plate, const StellarCatalog& cata
     PreparedImage p;
     p.source = sources[k];
     const double t_s = SecondsBetween(first, image.mid_time);
+    p.time_s = t_s;
     p.set = sets == 1 ? 0 : std::min(sets - 1, static_cast<int>(std::floor(t_s / (span_s / sets))));
     p.star = star_index.at(image.star_id);
     p.equation.x_mm = image.x_mm;
@@ -156,6 +159,20 @@ PreparedPlate PreparePlate(const StellarPlate& plate, const StellarCatalog& cata
   }
   out.unit_sigma_um = 1000.0 * std::sqrt(sum_sigma2 / (2.0 * out.images.size()));
   return out;
+}
+
+void AlignToReference(const PreparedPlate& reference, PreparedPlate* plate) {
+  const int sets = static_cast<int>(reference.set_m0.size());
+  plate->set_m0 = reference.set_m0;
+  plate->set_span_s.assign(sets, {1e300, -1e300});
+  const double offset_s = SecondsBetween(reference.first_time, plate->first_time);
+  for (PreparedImage& image : plate->images) {
+    const double t_s = offset_s + image.time_s;  // after the reference's first image
+    image.set = sets == 1 ? 0 : std::clamp(static_cast<int>(std::floor(t_s / (reference.span_s / sets))), 0, sets - 1);
+    image.equation.m0 = reference.set_m0[image.set];
+    plate->set_span_s[image.set].first = std::min(plate->set_span_s[image.set].first, t_s);
+    plate->set_span_s[image.set].second = std::max(plate->set_span_s[image.set].second, t_s);
+  }
 }
 
 }  // namespace platemeter::stellar_internal

@@ -19,6 +19,47 @@ int AddCameraBlock(const std::string& label, const StellarCamera& values, const 
   return block;
 }
 
+namespace {
+
+// The plate's own blocks: deformation and stars (the catalog's a-priori places).
+void AddDeformationAndStars(const StellarPlate& plate, const PreparedPlate& prepared, const StellarOptions& options,
+                            AdjustmentProblem* problem, PlateBlocks* blocks) {
+  blocks->deformation = problem->AddBlock(fmt::format("plate {} deformation", plate.id), "deformation",
+                                          BlockKind::kStation, {"s", "epsilon_rad"}, {0.0, 0.0});
+  if (!options.deformation) {
+    problem->SetState(blocks->deformation, 0, ParameterState::Fixed());
+    problem->SetState(blocks->deformation, 1, ParameterState::Fixed());
+  }
+  for (const PreparedStar& star : prepared.stars) {
+    const int block = problem->AddBlock(fmt::format("plate {} star {}", plate.id, star.id), "star",
+                                        BlockKind::kPoint, {"east_rad", "north_rad"}, {0.0, 0.0});
+    blocks->stars.push_back(block);
+    if (star.known) {
+      problem->AddPrior(block, {0, 1}, Eigen::Vector2d::Zero(),
+                        Eigen::Matrix2d::Identity() * star.sigma_rad * star.sigma_rad,
+                        fmt::format("plate {} catalog place of {}", plate.id, star.id));
+    }
+  }
+}
+
+// Each image as an observation with its own sigmas; `cost` makes its equation.
+template <typename MakeCost>
+void AddImages(const StellarPlate& plate, const PreparedPlate& prepared, const MakeCost& cost,
+               AdjustmentProblem* problem, PlateBlocks* blocks) {
+  blocks->first_observation = -1;
+  for (const PreparedImage& image : prepared.images) {
+    const StarImageObservation& source = plate.images[image.source];
+    const Eigen::Matrix2d covariance =
+        Eigen::Vector2d(source.sigma_x_mm * source.sigma_x_mm, source.sigma_y_mm * source.sigma_y_mm).asDiagonal();
+    const auto [equation, equation_blocks] = cost(image);
+    const int index = problem->AddObservation(equation, equation_blocks, covariance, fmt::format("plate {}", plate.id),
+                                              fmt::format("{} ({})", source.image_id, source.star_id), source.origin);
+    if (blocks->first_observation < 0) blocks->first_observation = index;
+  }
+}
+
+}  // namespace
+
 PlateBlocks AddPlateToProblem(const StellarPlate& plate, const PreparedPlate& prepared, const StellarOptions& options,
                               int camera, AdjustmentProblem* problem) {
   PlateBlocks blocks;
@@ -31,33 +72,38 @@ PlateBlocks AddPlateToProblem(const StellarPlate& plate, const PreparedPlate& pr
                                                   BlockKind::kStation, {"omega_rad", "phi_rad", "kappa_rad"},
                                                   {0.0, 0.0, 0.0}));
   }
-  blocks.deformation = problem->AddBlock(fmt::format("plate {} deformation", plate.id), "deformation",
-                                         BlockKind::kStation, {"s", "epsilon_rad"}, {0.0, 0.0});
-  if (!options.deformation) {
-    problem->SetState(blocks.deformation, 0, ParameterState::Fixed());
-    problem->SetState(blocks.deformation, 1, ParameterState::Fixed());
-  }
-  for (const PreparedStar& star : prepared.stars) {
-    const int block = problem->AddBlock(fmt::format("plate {} star {}", plate.id, star.id), "star",
-                                        BlockKind::kPoint, {"east_rad", "north_rad"}, {0.0, 0.0});
-    blocks.stars.push_back(block);
-    if (star.known) {
-      problem->AddPrior(block, {0, 1}, Eigen::Vector2d::Zero(),
-                        Eigen::Matrix2d::Identity() * star.sigma_rad * star.sigma_rad,
-                        fmt::format("plate {} catalog place of {}", plate.id, star.id));
-    }
-  }
-  blocks.first_observation = -1;
+  AddDeformationAndStars(plate, prepared, options, problem, &blocks);
+  AddImages(
+      plate, prepared,
+      [&](const PreparedImage& image) {
+        return std::make_pair(StellarImageEquation::Create(image.equation),
+                              std::vector<int>{camera, blocks.sets[image.set], blocks.deformation,
+                                               blocks.stars[image.star]});
+      },
+      problem, &blocks);
+  return blocks;
+}
+
+PlateBlocks AddInterlockedPlateToProblem(const StellarPlate& plate, const PreparedPlate& prepared,
+                                         const StellarOptions& options, int camera, const PlateBlocks& reference,
+                                         int interlock, AdjustmentProblem* problem) {
+  PlateBlocks blocks;
+  blocks.sets = reference.sets;
   for (const PreparedImage& image : prepared.images) {
-    const StarImageObservation& source = plate.images[image.source];
-    const Eigen::Matrix2d covariance =
-        Eigen::Vector2d(source.sigma_x_mm * source.sigma_x_mm, source.sigma_y_mm * source.sigma_y_mm).asDiagonal();
-    const int index = problem->AddObservation(
-        StellarImageEquation::Create(image.equation),
-        {camera, blocks.sets[image.set], blocks.deformation, blocks.stars[image.star]}, covariance,
-        fmt::format("plate {}", plate.id), fmt::format("{} ({})", source.image_id, source.star_id), source.origin);
-    if (blocks.first_observation < 0) blocks.first_observation = index;
+    if (reference.sets[image.set] < 0)
+      throw Error(fmt::format("plate {}", plate.id),
+                  fmt::format("has images in orientation set {} of its exposure, in which the reference plate has none",
+                              image.set + 1));
   }
+  AddDeformationAndStars(plate, prepared, options, problem, &blocks);
+  AddImages(
+      plate, prepared,
+      [&](const PreparedImage& image) {
+        return std::make_pair(InterlockedImageEquation::Create(image.equation),
+                              std::vector<int>{camera, reference.sets[image.set], interlock, blocks.deformation,
+                                               blocks.stars[image.star]});
+      },
+      problem, &blocks);
   return blocks;
 }
 

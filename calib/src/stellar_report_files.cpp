@@ -89,6 +89,40 @@ ordered_json CombinationJson(const StellarCombination& c) {
   return j;
 }
 
+ordered_json InterlockJson(const StellarInterlockResult& r) {
+  ordered_json j;
+  j["exposures"] = r.exposures;
+  j["cameras"] = ordered_json::array();
+  for (const InterlockCameraResult& c : r.cameras) {
+    j["cameras"].push_back({{"name", c.name}, {"plates", c.plates}, {"stars", c.stars}, {"images", c.images},
+                            {"rejected_images", c.rejected_images}, {"rms_residual_um", c.rms_residual_um},
+                            {"camera", CameraJson(c.camera, c.camera_sigma)}});
+  }
+  j["interlocks"] = ordered_json::array();
+  for (const CameraInterlockResult& i : r.interlocks) {
+    std::vector<std::vector<double>> matrix(3), covariance(3), elements(9);
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) {
+        matrix[a].push_back(i.matrix(a, b));
+        covariance[a].push_back(i.angles.covariance_rad2(a, b));
+      }
+    }
+    for (int a = 0; a < 9; ++a) {
+      for (int b = 0; b < 9; ++b) elements[a].push_back(i.element_covariance(a, b));
+    }
+    j["interlocks"].push_back(
+        {{"from", i.from}, {"to", i.to}, {"matrix", matrix},
+         {"convention", "to_from_from = R3(kappa) R2(phi) R1(omega), seed 004 Table A.6"},
+         {"omega_rad", i.angles.angles.omega_rad}, {"phi_rad", i.angles.angles.phi_rad},
+         {"kappa_rad", i.angles.angles.kappa_rad}, {"omega_sigma_arcsec", i.angles.omega_sigma_arcsec},
+         {"phi_sigma_arcsec", i.angles.phi_sigma_arcsec}, {"kappa_sigma_arcsec", i.angles.kappa_sigma_arcsec},
+         {"angle_covariance_rad2", covariance}, {"element_covariance", elements}, {"summary", i.angles.summary}});
+  }
+  j["statistics"] = StatisticsJson(r.adjustment);
+  j["rank"] = RankReportJson(r.adjustment.rank);
+  return j;
+}
+
 }  // namespace
 
 PrintedCamera ToPrinted(const StellarCamera& values, const StellarCamera& sigmas) {
@@ -109,15 +143,26 @@ std::string FormatStellarJson(const StellarJob& job, const StellarJobResult& res
   ordered_json j;
   j["title"] = job.title;
   j["adjustment"] = "stellar calibration (seed 001), docs/stellar.md";
-  j["camera"] = job.camera.name;
+  j["cameras"] = ordered_json::array();
+  for (const CameraDefinition& c : job.cameras) j["cameras"].push_back(c.name);
   j["frames"] = "plate_frame: x right, y up, xs/ys from the principal point, Phi_T rad; seed001_printed_frame: "
                 "left-handed (y down), um, xs/ys from the reseau centre, Phi_T deg";
   j["catalog"] = {{"path", job.catalog_path}, {"magnitude_limit", job.magnitude_limit},
                   {"sigma_arcsec", job.catalog_sigma_arcsec}, {"stars", result.catalog.size()}};
   j["plates"] = ordered_json::array();
-  for (size_t i = 0; i < result.singles.size(); ++i) j["plates"].push_back(PlateJson(result.singles[i], result.identification[i]));
+  for (size_t i = 0; i < result.singles.size(); ++i) {
+    ordered_json plate = PlateJson(result.singles[i], result.identification[i]);
+    plate["camera_name"] = job.cameras[job.plates[i].camera].name;
+    plate["exposure"] = job.plates[i].exposure;
+    j["plates"].push_back(std::move(plate));
+  }
   j["combinations"] = ordered_json::array();
-  for (const StellarCombination& c : result.combinations) j["combinations"].push_back(CombinationJson(c));
+  for (size_t k = 0; k < result.combinations.size(); ++k) {
+    ordered_json c = CombinationJson(result.combinations[k]);
+    c["camera_name"] = job.cameras[result.combination_camera[k]].name;
+    j["combinations"].push_back(std::move(c));
+  }
+  if (result.interlock) j["interlock"] = InterlockJson(*result.interlock);
   return j.dump(2) + "\n";
 }
 
@@ -152,14 +197,24 @@ std::string FormatIdentificationCsv(const StellarJobResult& result) {
   return out;
 }
 
-CameraDefinition StellarCameraDefinition(const StellarJob& job, const StellarJobResult& result) {
-  const bool combined = !result.combinations.empty();
-  const StellarCamera& values = combined ? result.combinations.back().camera : result.singles.front().camera;
-  const StellarCamera& sigmas = combined ? result.combinations.back().camera_sigma : result.singles.front().camera_sigma;
+CameraDefinition StellarCameraDefinition(const StellarJob& job, const StellarJobResult& result, int camera) {
+  int combination = -1, single = -1;
+  for (size_t k = 0; k < result.combinations.size(); ++k) {
+    if (result.combination_camera[k] == camera) combination = static_cast<int>(k);
+  }
+  for (size_t i = 0; i < result.singles.size() && single < 0; ++i) {
+    if (job.plates[i].camera == camera) single = static_cast<int>(i);
+  }
+  if (combination < 0 && single < 0) throw Error("stellar calibration", "internal: a camera without plates");
+  const bool combined = combination >= 0;
+  const StellarCamera& values = combined ? result.combinations[combination].camera : result.singles[single].camera;
+  const StellarCamera& sigmas =
+      combined ? result.combinations[combination].camera_sigma : result.singles[single].camera_sigma;
+  const CameraDefinition& source = job.cameras[camera];
   const PrintedCamera p = ToPrinted(values, sigmas);
-  CameraDefinition d = job.camera;
-  d.description = "calibrated by platemeter's stellar calibration (seed 001) from " + job.camera.name;
-  d.source = job.title + (combined ? "; " + result.combinations.back().name : "; plate " + result.singles.front().plate_id);
+  CameraDefinition d = source;
+  d.description = "calibrated by platemeter's stellar calibration (seed 001) from " + source.name;
+  d.source = job.title + (combined ? "; " + result.combinations[combination].name : "; plate " + result.singles[single].plate_id);
   d.nominal_principal_distance_mm = values[0];
   LensCalibration lens;
   lens.model = "orbigon-11";
@@ -188,8 +243,11 @@ std::vector<std::string> WriteStellarOutputs(const std::string& dir, const Stell
   files.emplace_back("report.md", FormatStellarMarkdown(job, result));
   files.emplace_back("residuals.csv", FormatStellarResidualsCsv(result));
   files.emplace_back("identification.csv", FormatIdentificationCsv(result));
-  files.emplace_back("camera-" + job.camera.name + "-stellar.toml",
-                     "# " + job.title + "\n# Format: docs/definitions.md\n\n" + ToToml(StellarCameraDefinition(job, result)));
+  for (size_t k = 0; k < job.cameras.size(); ++k) {
+    files.emplace_back("camera-" + job.cameras[k].name + "-stellar.toml",
+                       "# " + job.title + "\n# Format: docs/definitions.md\n\n" +
+                           ToToml(StellarCameraDefinition(job, result, static_cast<int>(k))));
+  }
   return WriteOutputFiles(dir, files);
 }
 

@@ -52,23 +52,30 @@ void Table2(const StellarJobResult& result, std::string* md) {
   *md += "\n";
 }
 
-void Table3(const StellarJobResult& result, std::string* md) {
-  if (result.combinations.empty()) return;
-  *md += "## Multiple-plate calibrations (seed 001 Table 3)\n\n";
-  *md += "Pope's generalized weighted mean, relinearized until it is the simultaneous solution (docs/stellar.md).\n\n";
+// A table with a value and an s.e. column per camera (anything with name,
+// camera and camera_sigma), one row per parameter in the printed frame.
+template <typename Columns>
+void CameraColumns(const Columns& columns, std::string* md) {
   *md += "| |";
-  for (const auto& c : result.combinations) *md += " " + c.name + " | s.e. |";
+  for (const auto& c : columns) *md += " " + c.name + " | s.e. |";
   *md += "\n|---|";
-  for (size_t k = 0; k < result.combinations.size(); ++k) *md += "---|---|";
+  for (size_t k = 0; k < columns.size(); ++k) *md += "---|---|";
   *md += "\n";
   for (int i = 0; i < kStellarCameraParams; ++i) {
     *md += std::string("| ") + kPrintedCameraNames[i] + " |";
-    for (const auto& c : result.combinations) {
+    for (const auto& c : columns) {
       const PrintedCamera p = ToPrinted(c.camera, c.camera_sigma);
       *md += " " + Value(i, p.value[i]) + " | " + Sigma(i, p.sigma[i]) + " |";
     }
     *md += "\n";
   }
+}
+
+void Table3(const StellarJobResult& result, std::string* md) {
+  if (result.combinations.empty()) return;
+  *md += "## Multiple-plate calibrations (seed 001 Table 3)\n\n";
+  *md += "Pope's generalized weighted mean, relinearized until it is the simultaneous solution (docs/stellar.md).\n\n";
+  CameraColumns(result.combinations, md);
   auto row = [&](const std::string& name, auto cell) {
     *md += "| " + name + " |";
     for (const auto& c : result.combinations) *md += " " + cell(c) + " | |";
@@ -93,12 +100,54 @@ void Table3(const StellarJobResult& result, std::string* md) {
   *md += "\n";
 }
 
+// Seed 004 Tables A.4-A.6: each camera of the joint adjustment and the
+// relative orientation of every other camera to camera 0.
+void TableInterlock(const StellarInterlockResult& r, std::string* md) {
+  *md += "## Cameras exposed together (seed 004 SMAC, Tables A.4-A.6)\n\n";
+  *md += fmt::format("Joint adjustment of {} exposures: sigma0 = {:.3f} with {:.0f} degrees of freedom (chi-square "
+                     "test of the a-priori sigmas: p = {:.3f}{}).\n\n",
+                     r.exposures, r.adjustment.sigma0, r.adjustment.dof, r.adjustment.chi_square.p_value,
+                     r.adjustment.chi_square.rejected ? ", REJECTED" : ", accepted");
+  CameraColumns(r.cameras, md);
+  auto row = [&](const std::string& name, auto cell) {
+    *md += "| " + name + " |";
+    for (const auto& c : r.cameras) *md += " " + cell(c) + " | |";
+    *md += "\n";
+  };
+  row("plates", [](const InterlockCameraResult& c) { return std::to_string(c.plates); });
+  row("stars", [](const InterlockCameraResult& c) { return std::to_string(c.stars); });
+  row("star images", [](const InterlockCameraResult& c) { return std::to_string(c.images); });
+  row("rejected images", [](const InterlockCameraResult& c) { return std::to_string(c.rejected_images); });
+  row("unweighted mean error (um)", [](const InterlockCameraResult& c) { return fmt::format("{:.2f}", c.rms_residual_um); });
+  for (const CameraInterlockResult& i : r.interlocks) {
+    *md += fmt::format("\nRelative orientation matrix from camera {} to camera {} (seed 004's sequence: omega, phi, "
+                       "kappa applied to the axes of {}):\n\n",
+                       i.from, i.to, i.to);
+    *md += "| | | |\n|---|---|---|\n";
+    for (int a = 0; a < 3; ++a) {
+      *md += fmt::format("| {:+.8f} | {:+.8f} | {:+.8f} |\n", i.matrix(a, 0), i.matrix(a, 1), i.matrix(a, 2));
+    }
+    *md += "\nCovariance matrix of omega, phi, kappa (rad^2):\n\n| | | |\n|---|---|---|\n";
+    for (int a = 0; a < 3; ++a) {
+      const Eigen::Matrix3d& c = i.angles.covariance_rad2;
+      *md += fmt::format("| {:+.5e} | {:+.5e} | {:+.5e} |\n", c(a, 0), c(a, 1), c(a, 2));
+    }
+    *md += fmt::format("\n- OMEGA = {}  S.D. {:.1f}\"\n- PHI = {}  S.D. {:.1f}\"\n- KAPPA = {}  S.D. {:.1f}\"\n",
+                       DmsFromRadians(i.angles.angles.omega_rad), i.angles.omega_sigma_arcsec,
+                       DmsFromRadians(i.angles.angles.phi_rad), i.angles.phi_sigma_arcsec,
+                       DmsFromRadians(i.angles.angles.kappa_rad), i.angles.kappa_sigma_arcsec);
+  }
+  *md += "\n";
+}
+
 }  // namespace
 
 std::string FormatStellarMarkdown(const StellarJob& job, const StellarJobResult& result) {
   std::string md = "# " + job.title + "\n\n";
+  std::string cameras;
+  for (const CameraDefinition& c : job.cameras) cameras += (cameras.empty() ? "" : ", ") + c.name;
   md += fmt::format("Camera {}; catalog {} to V = {:.1f} ({} stars, position sigma {:.2f}\"); {} plate(s).\n\n",
-                    job.camera.name, job.catalog_path, job.magnitude_limit, result.catalog.size(),
+                    cameras, job.catalog_path, job.magnitude_limit, result.catalog.size(),
                     job.catalog_sigma_arcsec, result.singles.size());
   for (size_t i = 0; i < result.identification.size(); ++i) {
     if (!result.identification[i]) continue;
@@ -111,6 +160,7 @@ std::string FormatStellarMarkdown(const StellarJob& job, const StellarJobResult&
   md += "\n";
   Table2(result, &md);
   Table3(result, &md);
+  if (result.interlock) TableInterlock(*result.interlock, &md);
   return md;
 }
 

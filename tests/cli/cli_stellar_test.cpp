@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "platemeter/calib/rotations.h"
 #include "platemeter/grids/registry.h"
 #include "platemeter/samples/stellar_plates.h"
 #include "support/stellar_plates.h"
@@ -95,6 +96,67 @@ TEST(CliStellar, IdentifiesAdjustsAndCombinesTwoPlates) {
   EXPECT_EQ(show.exit_code, 0) << show.err;
 }
 
+// Seed 004's SMAC through the job file: two cameras 96 deg apart on one mount
+// (camera "orbigon" looking north at 48 deg altitude, a second camera
+// "orbigon-b" looking south, defined in the test by its nominal principal
+// distance only), two exposures; the interlock within 3 sigma of the truth.
+TEST(CliStellar, InterlocksTwoCamerasExposedTogether) {
+  testing::TempDir dir;
+  const DefinitionRegistry registry;
+  const CameraDefinition lens_a = registry.Camera("orbigon");
+  CameraDefinition lens_b = lens_a;
+  lens_b.lens->principal_distance_mm += 0.6;
+  lens_b.lens->principal_point_x_mm += 0.040;
+  const std::string definitions = dir.file("b.toml");
+  WriteText(definitions, "[[camera]]\nname = \"orbigon-b\"\ndescription = \"a second Orbigon\"\nsource = \"test\"\n"
+                         "format_width_mm = 114.0\nformat_height_mm = 114.0\nnominal_principal_distance_mm = 80.8\n");
+  std::string plates;
+  Eigen::Matrix3d b_from_a;
+  for (const auto& [exposure, start] : {std::pair{"1", "1972-05-12T05:30:00Z"}, std::pair{"2", "1972-04-09T06:10:00Z"}}) {
+    for (const bool b : {false, true}) {
+      const std::string id = std::string(b ? "B" : "A") + exposure;
+      sim::StellarPlateSimulation s = testing::BeltsvillePlate(id, start, b ? 30.0 : 0.0);
+      s.field.place.pressure_hpa = 1013.25 * std::exp(-50.0 / (29.3 * (273.15 + 10.0)));  // the job's default
+      s.field.axis_azimuth_deg = b ? 180.0 : 0.0;
+      s.field.axis_altitude_deg = 48.0;
+      s.magnitude_limit = 5.5;
+      const sim::StellarTruthPlate truth = sim::SimulateStellarTruth(s, b ? lens_b : lens_a);
+      if (b) b_from_a = truth.camera_from_enu * b_from_a.transpose();
+      else b_from_a = truth.camera_from_enu;
+      const sim::NoisyStellarPlate noisy = sim::Noisy(truth, {.seed = static_cast<uint64_t>(40 + id[1] + 2 * b)});
+      const std::string path = dir.file(id + ".csv");
+      sim::WriteStellarMeasurementFile(noisy.plate, path, true);
+      plates += "[[plate]]\nid = \"" + id + "\"\nmeasurements = \"" + path + "\"\nexposure = \"" + exposure +
+                "\"\naxis_azimuth_deg = " + (b ? "178" : "3") + "\naxis_altitude_deg = 46\n" +
+                (b ? "camera = \"orbigon-b\"\n" : "");
+    }
+  }
+  const std::string job = dir.file("job.toml");
+  WriteText(job, "camera = \"orbigon\"\nmagnitude_limit = 5.5\norientation_sets = 2\n" + std::string(kSite) + plates);
+  const std::string out = dir.file("out");
+  const auto run = RunPlatemeter("--definitions '" + definitions + "' calibrate stellar '" + job + "' -o '" + out + "'");
+  ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+  std::printf("%s", run.out.c_str());
+  for (const char* name : {"camera-orbigon-stellar.toml", "camera-orbigon-b-stellar.toml"})
+    EXPECT_TRUE(std::filesystem::exists(out + "/" + name)) << name;
+  const nlohmann::json j = nlohmann::json::parse(testing::ReadTextFile(out + "/calibration.json"));
+  ASSERT_TRUE(j.contains("interlock"));
+  const auto& interlock = j["interlock"]["interlocks"][0];
+  EXPECT_EQ(interlock["to"], "orbigon-b");
+  const OmegaPhiKappa truth = OmegaPhiKappaFromMatrix(b_from_a);
+  const double truth_rad[3] = {truth.omega_rad, truth.phi_rad, truth.kappa_rad};
+  const char* names[3] = {"omega", "phi", "kappa"};
+  for (int i = 0; i < 3; ++i) {
+    const double error_arcsec =
+        std::remainder(interlock[std::string(names[i]) + "_rad"].get<double>() - truth_rad[i], 2 * M_PI) * 180 * 3600 / M_PI;
+    const double sigma_arcsec = interlock[std::string(names[i]) + "_sigma_arcsec"].get<double>();
+    EXPECT_GT(sigma_arcsec, 0.0);
+    EXPECT_LT(std::abs(error_arcsec), 3.0 * sigma_arcsec) << names[i];
+  }
+  EXPECT_NEAR(j["interlock"]["statistics"]["sigma0"].get<double>(), 1.0, 0.1);
+  EXPECT_NE(testing::ReadTextFile(out + "/report.md").find("Relative orientation matrix"), std::string::npos);
+}
+
 TEST(CliStellar, BadJobsAreOneLineErrors) {
   testing::TempDir dir;
   const std::string out = dir.file("out");
@@ -106,6 +168,8 @@ TEST(CliStellar, BadJobsAreOneLineErrors) {
       {"camera = \"orbigon\"\n", "[site]"},
       {"camera = \"orbigon\"\norientation_sets = 4\n" + std::string(kSite), "orientation_sets"},
       {"camera = \"orbigon\"\n" + std::string(kSite) + "[[plate]]\nid = \"A\"\n", "needs 'id' and 'measurements'"},
+      {"camera = \"orbigon\"\n" + std::string(kSite) + "[[plate]]\nid = \"A\"\nmeasurements = \"" + measurements +
+           "\"\ncamera = \"nosuch\"\n", "unknown camera 'nosuch'"},
   };
   for (const auto& [text, reason] : cases) {
     const std::string job = dir.file("bad.toml");

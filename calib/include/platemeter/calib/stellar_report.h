@@ -5,8 +5,10 @@
 //   report.md          Tables 2 and 3 in seed 001's form (printed frame, um)
 //   residuals.csv      one row per image: plate, image, star, status, vx, vy (um), reason
 //   identification.csv one row per detected star: plate, star key, catalog key, status
-//   camera-NAME.toml   the calibrated camera (the last combination, or the
-//                      single plate) as a camera definition `measure` loads
+//   camera-NAME-stellar.toml  per camera: the calibrated camera (its last
+//                      combination, or its first plate) as a definition `measure` loads
+// With plates of several cameras sharing exposures, calibration.json and
+// report.md add the cameras' joint adjustment and interlock (seed 004).
 // Every text is formatted before the first file is written.
 #include <string>
 #include <vector>
@@ -30,8 +32,10 @@ std::string FormatStellarJson(const StellarJob& job, const StellarJobResult& res
 std::string FormatStellarMarkdown(const StellarJob& job, const StellarJobResult& result);
 std::string FormatStellarResidualsCsv(const StellarJobResult& result);
 std::string FormatIdentificationCsv(const StellarJobResult& result);
-// The calibrated camera: the job's definition with a new orbigon-11 lens (printed frame) and sigmas.
-CameraDefinition StellarCameraDefinition(const StellarJob& job, const StellarJobResult& result);
+// Camera `camera` (index in job.cameras) calibrated: its definition with a new
+// orbigon-11 lens (printed frame) and sigmas, from its last combination or
+// its first plate.
+CameraDefinition StellarCameraDefinition(const StellarJob& job, const StellarJobResult& result, int camera);
 
 // Writes the outputs into `dir` (created); returns the paths written.
 std::vector<std::string> WriteStellarOutputs(const std::string& dir, const StellarJob& job,

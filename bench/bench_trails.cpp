@@ -520,7 +520,8 @@ int main(int argc, char** argv) {
     }
   }
   if (n_err > 0)
-    std::printf("right dots' position error: RMS %.4f px per axis, RMS(error / sigma) %.2f\n",
+    // The rows' positions: each image's own measurement (the track's until 2026-11-26: docs/detect.md).
+    std::printf("right dots' position error (own measurement): RMS %.4f px per axis, RMS(error / sigma) %.2f\n",
                 std::sqrt(err2 / (2.0 * n_err)), std::sqrt(norm2 / (2.0 * n_err)));
 
   // ---- SEP on the same image (bench_stars' child mode), for the throughput

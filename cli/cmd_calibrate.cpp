@@ -1,9 +1,12 @@
 // platemeter calibrate bundle: the self-calibrating bundle adjustment of seed
 // 000 on a job file or on an observations CSV (docs/bundle-job.md), writing
-// calibration.json, report.md, residuals.csv and the calibrated camera.
+// calibration.json, report.md, report.html with its plots, residuals.csv and
+// the calibrated camera.
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <set>
 #include <sstream>
 
 #include "cmd_calibrate_simulate.h"
@@ -14,6 +17,7 @@
 #include "platemeter/calib/bundle_report.h"
 #include "platemeter/core/error.h"
 #include "platemeter/grids/registry.h"
+#include "platemeter/report/bundle_html_report.h"
 
 namespace platemeter::cli {
 namespace {
@@ -48,6 +52,20 @@ void SetFreeParameters(const std::string& list, CameraSetup* camera) {
     }
     if (index < 0) throw Error("--free", "unknown parameter '" + name + "' (known: c, xp, yp, k1, k2, k3, p1, p2, b1, b2)");
     camera->states[index] = ParameterState::Free();
+  }
+}
+
+// Plots of an earlier run that this one did not write (more frames, another
+// camera) would sit unlinked beside the new report.html: removed after the new set is in place.
+void RemoveStalePlots(const std::string& dir, const std::vector<std::string>& written) {
+  std::set<std::string> kept;
+  for (const std::string& path : written) kept.insert(std::filesystem::path(path).filename().string());
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(dir) / "plots", error)) {
+    const std::string extension = entry.path().extension().string();
+    if ((extension == ".png" || extension == ".svg") && !kept.count(entry.path().filename().string())) {
+      std::filesystem::remove(entry.path(), error);
+    }
   }
 }
 
@@ -106,7 +124,10 @@ void RunBundle(const BundleCommandOptions& o, const GlobalOptions& global) {
   report.warnings = warnings;
   report.export_pixel_size_um = job.output.export_pixel_size_um;
   report.export_image_size_px = job.output.export_image_size_px;
-  const std::vector<std::string> written = WriteBundleOutputs(o.output_dir, result, report);
+  // The HTML report and its plots are formatted first and written with the set.
+  const auto html = report::FormatBundleHtmlReport(result, checked.input, report);
+  const std::vector<std::string> written = WriteBundleOutputs(o.output_dir, result, report, html);
+  RemoveStalePlots(o.output_dir, written);
   std::cout << result.adjustment.summary << '\n';
   for (const BundleCameraResult& camera : result.cameras) {
     std::cout << "camera " << camera.name << ":";
@@ -116,7 +137,15 @@ void RunBundle(const BundleCommandOptions& o, const GlobalOptions& global) {
     }
     std::cout << '\n';
   }
-  for (const std::string& path : written) std::cout << "wrote " << path << '\n';
+  int plots = 0;
+  for (const std::string& path : written) {
+    if (path.find("/plots/") != std::string::npos) {
+      ++plots;
+    } else {
+      std::cout << "wrote " << path << '\n';
+    }
+  }
+  if (plots > 0) std::cout << "wrote " << plots << " plot files (PNG and SVG) into " << o.output_dir << "/plots\n";
 }
 
 }  // namespace

@@ -19,11 +19,12 @@ struct StellarCommandOptions {
   bool quiet = false;
 };
 
-void PrintCamera(const std::string& what, const StellarCamera& values, const StellarCamera& sigmas) {
-  const PrintedCamera p = ToPrinted(values, sigmas);
-  std::cout << what << " (seed 001's printed frame):";
-  for (int i = 0; i < kStellarCameraParams; ++i)
-    std::cout << fmt::format(" {} = {:.6g} +- {:.3g};", kPrintedCameraNames[i], p.value[i], p.sigma[i]);
+void PrintCamera(const std::string& what, DistortionModelId lens, const StellarCamera& values,
+                 const StellarCamera& sigmas) {
+  const ReportedCamera c = ReportCamera(lens, values, sigmas);
+  std::cout << what << " (" << c.frame << "):";
+  for (size_t i = 0; i < c.names.size(); ++i)
+    std::cout << fmt::format(" {} = {:.6g} +- {:.3g};", c.names[i], c.value[i], c.sigma[i]);
   std::cout << '\n';
 }
 
@@ -54,13 +55,14 @@ void RunStellar(const StellarCommandOptions& o, const GlobalOptions& global) {
     }
     if (combination >= 0) {
       const StellarCombination& c = result.combinations[combination];
-      PrintCamera("camera " + job.cameras[k].name + " (" + c.name + ")", c.camera, c.camera_sigma);
+      PrintCamera("camera " + job.cameras[k].name + " (" + c.name + ")", job.options.lens_model, c.camera,
+                  c.camera_sigma);
       continue;
     }
     for (size_t i = 0; i < result.singles.size(); ++i) {
       if (job.plates[i].camera != static_cast<int>(k)) continue;
       PrintCamera("camera " + job.cameras[k].name + " (plate " + result.singles[i].plate_id + ")",
-                  result.singles[i].camera, result.singles[i].camera_sigma);
+                  job.options.lens_model, result.singles[i].camera, result.singles[i].camera_sigma);
       break;
     }
   }

@@ -69,12 +69,13 @@ MeasuredPoint StarRow(const DetectedStar& star) {
   return row;
 }
 
-// A tagged trail image. Its position is the trail's fitted track at the
-// image's mid-exposure (docs/detect.md: correlated along the trail); the
-// direct measurement stays in the flags. A bad image (off the track) keeps
-// its measured position and is rejected; one found along the plate's flow
-// beyond the track's images (flow_check) or measured at the track's
-// prediction (forced_fit) keeps its measured position.
+// A tagged trail image. Its position and sigmas are the image's own measurement (the detector's
+// segment or PSF fit: independent of its neighbours; docs/detect.md, "Duty-cycle trails"), with the
+// decoder's tags. The trail's fitted track at the image's mid-exposure (smooth along the trail, its
+// errors correlated from dot to dot, its sigma the track's formal one) is only a flag, track_x_px/
+// track_y_px with track_sigma_*_px, for the images the track was fitted to (track_fit, and bad ones).
+// An image off its track (bad) is rejected; one found along the plate's flow beyond the track's images
+// (flow_check) or measured at the track's prediction (forced_fit) has no track of its own here.
 MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const calib::UtcInstant& start_utc) {
   MeasuredPoint row = StarRow(star);
   const bool dot = t.kind == ExposureKind::kDot;
@@ -88,20 +89,22 @@ MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const cali
   std::snprintf(value, sizeof value, t.flow_checked ? "flow_residual_px=%.4f" : "track_residual_px=%.4f",
                 t.residual_px);
   row.flags.push_back(value);
+  if (!t.flow_checked && !t.forced) {
+    std::snprintf(value, sizeof value, "track_x_px=%.4f", t.refined_px.x_px);
+    row.flags.push_back(value);
+    std::snprintf(value, sizeof value, "track_y_px=%.4f", t.refined_px.y_px);
+    row.flags.push_back(value);
+    std::snprintf(value, sizeof value, "track_sigma_x_px=%.5f", t.sigma_refined_x_px);
+    row.flags.push_back(value);
+    std::snprintf(value, sizeof value, "track_sigma_y_px=%.5f", t.sigma_refined_y_px);
+    row.flags.push_back(value);
+  }
   if (t.bad) {
     row.status = PointStatus::kRejected;
     row.flags.push_back("rejected:bad_fit");
     return row;
   }
-  std::snprintf(value, sizeof value, "measured_x_px=%.4f", star.point.position_px.x_px);
-  row.flags.push_back(value);
-  std::snprintf(value, sizeof value, "measured_y_px=%.4f", star.point.position_px.y_px);
-  row.flags.push_back(value);
   row.flags.push_back(t.flow_checked ? "flow_check" : t.forced ? "forced_fit" : "track_fit");
-  row.x_px = t.refined_px.x_px;
-  row.y_px = t.refined_px.y_px;
-  row.sigma_x_px = t.sigma_refined_x_px;
-  row.sigma_y_px = t.sigma_refined_y_px;
   return row;
 }
 

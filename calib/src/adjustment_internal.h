@@ -3,6 +3,7 @@
 // solver and the normal-equation reduction both see them.
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -101,11 +102,13 @@ struct PointNormals {
   Eigen::Matrix3d n_pp_inverse = Eigen::Matrix3d::Zero();  // pseudo-inverse over the free, determined coordinates
   int rank = 0;                                            // free coordinates determined
   std::vector<std::pair<int, Eigen::MatrixXd>> n_pb;       // (global block, 3 x size)
+  Eigen::Vector3d b_p = Eigen::Vector3d::Zero();           // J_p^T v (whitened)
   int rays = 0;
 };
 
 struct ReducedNormals {
   Eigen::MatrixXd n_gg;  // num_global x num_global (fixed rows/columns zero)
+  Eigen::VectorXd b_g;   // reduced J_g^T v - N_gp N_pp^-1 J_p^T v (whitened v = model - measured)
   std::vector<PointNormals> points;
   double vtpv = 0.0;     // sum of squared whitened residuals of the used equations
   long observation_rows = 0;
@@ -113,6 +116,21 @@ struct ReducedNormals {
 };
 
 ReducedNormals BuildReducedNormals(const AdjustmentProblem::Impl& impl);
+
+// --- Gauss-Newton on the reduced normals (adjustment_gauss_newton.cpp) -----
+struct GaussNewtonOutcome {
+  bool ok = false;         // false: a step could not be taken (singular or near-singular
+                           // reduced normals, a gauge freedom, no descent): the caller goes on with Ceres
+  bool converged = false;
+  int iterations = 0;         // steps taken
+  std::string message;
+  std::optional<ReducedNormals> normals;  // at the final values, when converged
+};
+// The weighted pass by Gauss-Newton steps on the reduced normal equations,
+// each point's step by back-substitution, values updated in impl.blocks;
+// `problem` (the same equations) evaluates the cost.
+GaussNewtonOutcome SolveByReducedNormals(AdjustmentProblem::Impl& impl, ceres::Problem& problem,
+                                         const AdjustmentOptions& options, const AdjustmentProgress& progress);
 
 // --- Covariance, rank, statistics (adjustment_covariance.cpp) --------------
 void ComputeCovarianceAndRank(const AdjustmentProblem::Impl& impl, const ReducedNormals& normals,

@@ -91,6 +91,7 @@ bool Evaluate(const AdjustmentProblem::Impl& impl, const AdjustmentEquation& e, 
 // What one thread accumulates: the reduced matrix and the sums.
 struct Accumulator {
   Eigen::MatrixXd n_gg;
+  Eigen::VectorXd b_g;
   double vtpv = 0.0;
   long observation_rows = 0, prior_rows = 0;
 };
@@ -111,6 +112,7 @@ void AddGlobalTerms(const AdjustmentProblem::Impl& impl, const AdjustmentEquatio
       sum->n_gg.block(a.global_offset, b.global_offset, a.names.size(), b.names.size()).noalias() +=
           x.jacobians[i].transpose() * x.jacobians[j];
     }
+    sum->b_g.segment(a.global_offset, a.names.size()).noalias() += x.jacobians[i].transpose() * x.residual;
   }
 }
 
@@ -143,6 +145,7 @@ void ReducePoint(const AdjustmentProblem::Impl& impl, const std::vector<int>& eq
     AddGlobalTerms(impl, e, x, sum);
     const RowMajor& jp = x.jacobians[x.point_slot];
     point->n_pp.noalias() += jp.transpose() * jp;
+    point->b_p.noalias() += jp.transpose() * x.residual;
     if (!e.is_prior) ++point->rays;
     for (size_t i = 0; i < e.blocks.size(); ++i) {
       if (static_cast<int>(i) == x.point_slot) continue;
@@ -164,8 +167,14 @@ void ReducePoint(const AdjustmentProblem::Impl& impl, const std::vector<int>& eq
     stack.middleCols(m, n_pb.cols()) = n_pb;
     m += static_cast<int>(n_pb.cols());
   }
-  // The lower triangle's blocks of N_gp N_pp^-1 N_pg (see AddGlobalTerms).
+  // The lower triangle's blocks of N_gp N_pp^-1 N_pg (see AddGlobalTerms),
+  // and b_g -= N_gp N_pp^-1 b_p.
   const Eigen::MatrixXd inverse_times_stack = point->n_pp_inverse * stack;
+  const Eigen::Vector3d inverse_times_b = point->n_pp_inverse * point->b_p;
+  for (const auto& [a_block, n_pa] : point->n_pb) {
+    const AdjustmentBlock& a = impl.blocks[a_block];
+    sum->b_g.segment(a.global_offset, a.names.size()).noalias() -= n_pa.transpose() * inverse_times_b;
+  }
   int row = 0;
   for (const auto& [a_block, n_pa] : point->n_pb) {
     const AdjustmentBlock& a = impl.blocks[a_block];
@@ -205,6 +214,7 @@ ReducedNormals BuildReducedNormals(const AdjustmentProblem::Impl& impl) {
   tbb::enumerable_thread_specific<Accumulator> sums([&] {
     Accumulator a;
     a.n_gg = Eigen::MatrixXd::Zero(impl.num_global, impl.num_global);
+    a.b_g = Eigen::VectorXd::Zero(impl.num_global);
     return a;
   });
   tbb::parallel_for(tbb::blocked_range<int>(0, impl.num_points, 64), [&](const tbb::blocked_range<int>& range) {
@@ -215,12 +225,14 @@ ReducedNormals BuildReducedNormals(const AdjustmentProblem::Impl& impl) {
   });
   Accumulator total;
   total.n_gg = Eigen::MatrixXd::Zero(impl.num_global, impl.num_global);
+  total.b_g = Eigen::VectorXd::Zero(impl.num_global);
   EvaluatedEquation x;
   for (int index : other_equations) {
     if (Evaluate(impl, impl.equations[index], &x)) AddGlobalTerms(impl, impl.equations[index], x, &total);
   }
   for (const Accumulator& sum : sums) {
     total.n_gg += sum.n_gg;
+    total.b_g += sum.b_g;
     total.vtpv += sum.vtpv;
     total.observation_rows += sum.observation_rows;
     total.prior_rows += sum.prior_rows;
@@ -229,6 +241,7 @@ ReducedNormals BuildReducedNormals(const AdjustmentProblem::Impl& impl) {
     for (Eigen::Index i = 0; i < j; ++i) total.n_gg(i, j) = total.n_gg(j, i);
   }
   normals.n_gg = std::move(total.n_gg);
+  normals.b_g = std::move(total.b_g);
   normals.vtpv = total.vtpv;
   normals.observation_rows = total.observation_rows;
   normals.prior_rows = total.prior_rows;

@@ -172,28 +172,51 @@ AdjustmentResult AdjustmentProblem::Solve(const AdjustmentOptions& options, cons
       }
     }
   }
-  ProgressCallback callback(progress, "weighted pass", options.max_iterations);
-  solver.callbacks = {&callback};
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
-  iterations += static_cast<int>(summary.iterations.size());
-  result.converged = summary.termination_type == ceres::CONVERGENCE;
-  result.iterations = iterations;
-  if (summary.termination_type == ceres::FAILURE) {
-    throw Error("adjustment", "the solver failed: " + summary.message);
+  // The weighted pass: Gauss-Newton on the reduced normals, or Ceres's trust
+  // region where that cannot step (adjustment_gauss_newton.cpp).
+  GaussNewtonOutcome gauss_newton = SolveByReducedNormals(impl, problem, options, progress);
+  iterations += gauss_newton.iterations;
+  std::string stop_message = gauss_newton.message;
+  if (gauss_newton.ok) {
+    result.converged = gauss_newton.converged;
+  } else {
+    ProgressCallback callback(progress, "weighted pass", options.max_iterations);
+    solver.callbacks = {&callback};
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver, &problem, &summary);
+    iterations += static_cast<int>(summary.iterations.size());
+    result.converged = summary.termination_type == ceres::CONVERGENCE;
+    stop_message = summary.message;
+    if (summary.termination_type == ceres::FAILURE) {
+      throw Error("adjustment", "the solver failed: " + summary.message);
+    }
+    // Where the start was too far for Gauss-Newton (the stellar camera's
+    // point of symmetry and decentering angle do nothing while the distortion
+    // is zero), its steps now finish what the trust region began: to the
+    // stationary point, whatever the threads' order of summation did to
+    // Ceres's last iterations.
+    GaussNewtonOutcome finish = SolveByReducedNormals(impl, problem, options, progress);
+    if (finish.ok) {
+      iterations += finish.iterations;
+      result.converged = finish.converged;
+      stop_message = finish.message;
+      gauss_newton.normals = std::move(finish.normals);
+    }
   }
+  result.iterations = iterations;
   result.solve_seconds = SecondsSince(solve_start);
 
   const auto covariance_start = std::chrono::steady_clock::now();
   if (progress) progress("normal equations", 0.0);
-  const ReducedNormals normals = BuildReducedNormals(impl);
+  const ReducedNormals normals =
+      gauss_newton.normals ? std::move(*gauss_newton.normals) : BuildReducedNormals(impl);
   if (progress) progress("covariance", 0.0);
   ComputeCovarianceAndRank(impl, normals, options, &result);
   ComputeStatistics(impl, normals, options, &result);
   ComputePointEstimates(impl, normals, &result);
   result.covariance_seconds = SecondsSince(covariance_start);
   if (!result.converged) {
-    result.summary = fmt::format("The solver stopped without converging ({}): {} ", summary.message, result.summary);
+    result.summary = fmt::format("The solver stopped without converging ({}): {} ", stop_message, result.summary);
   }
   return result;
 }

@@ -115,7 +115,8 @@ void AppendExports(const CameraDefinition& camera, const BundleReportOptions& op
 }  // namespace
 
 std::vector<std::string> WriteBundleOutputs(const std::string& dir, const BundleResult& result,
-                                            const BundleReportOptions& options) {
+                                            const BundleReportOptions& options,
+                                            const std::vector<std::pair<std::string, std::string>>& extra_files) {
   std::string why;
   if (!options.Check(&why)) throw Error("bundle report options", why);
   // Every text is formatted before the first file is written: a failure leaves no partial set.
@@ -133,6 +134,7 @@ std::vector<std::string> WriteBundleOutputs(const std::string& dir, const Bundle
       AppendExports(CalibratedCameraDefinition(result, static_cast<int>(c), options.title), options, &files);
     }
   }
+  files.insert(files.end(), extra_files.begin(), extra_files.end());
   return WriteOutputFiles(dir, files);
 }
 

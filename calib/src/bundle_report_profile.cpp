@@ -24,8 +24,9 @@ LensEstimate BundleLensEstimate(const BundleResult& result, const BundleCameraRe
   return lens;
 }
 
-void AppendProfileTables(const BundleResult& result, const BundleCameraResult& camera,
-                         const BundleReportOptions& options, std::string* out) {
+DistortionProfile BundleDistortionProfile(const BundleResult& result, int camera_index,
+                                          const BundleReportOptions& options, std::vector<double> radii_mm) {
+  const BundleCameraResult& camera = result.cameras.at(camera_index);
   DistortionProfileOptions profile_options;
   const double half_diagonal = FormatHalfDiagonal_mm(camera.format_width_mm, camera.format_height_mm);
   if (options.balance_radius_mm) {
@@ -35,38 +36,55 @@ void AppendProfileTables(const BundleResult& result, const BundleCameraResult& c
     profile_options.balance = RadialBalance::kEqualLobeAreas;
   }
   profile_options.max_radius_mm = half_diagonal > 0 ? half_diagonal : 1.0;
-  profile_options.radii_mm = options.profile_radii_mm.empty()
-                                 ? DefaultProfileRadii_mm(camera.format_width_mm, camera.format_height_mm)
-                                 : options.profile_radii_mm;
+  if (radii_mm.empty()) {
+    radii_mm = options.profile_radii_mm.empty() ? DefaultProfileRadii_mm(camera.format_width_mm, camera.format_height_mm)
+                                                : options.profile_radii_mm;
+  }
+  profile_options.radii_mm = radii_mm;
+  return ComputeDistortionProfile(BundleLensEstimate(result, camera), profile_options);
+}
+
+std::string BundleBalanceWords(const BundleResult& result, int camera_index, const BundleReportOptions& options) {
+  const BundleCameraResult& camera = result.cameras.at(camera_index);
+  const double half_diagonal = FormatHalfDiagonal_mm(camera.format_width_mm, camera.format_height_mm);
+  return options.balance_radius_mm
+             ? fmt::format("balanced to zero at r = {} mm", *options.balance_radius_mm)
+             : fmt::format("balanced to equal positive and negative lobe areas over 0..{:.1f} mm",
+                           half_diagonal > 0 ? half_diagonal : 1.0);
+}
+
+void AppendProfileTables(const BundleResult& result, const BundleCameraResult& camera,
+                         const BundleReportOptions& options, TextDocument* doc) {
+  const int index = static_cast<int>(&camera - result.cameras.data());
   DistortionProfile profile;
   try {
-    profile = ComputeDistortionProfile(BundleLensEstimate(result, camera), profile_options);
+    profile = BundleDistortionProfile(result, index, options);
   } catch (const Error& e) {
-    *out += fmt::format("\nNo distortion profile: {}\n", e.reason());
+    doc->Paragraph(fmt::format("No distortion profile: {}", e.reason()));
     return;
   }
-  const std::string balance = options.balance_radius_mm
-                                  ? fmt::format("balanced to zero at r = {} mm", *options.balance_radius_mm)
-                                  : fmt::format("balanced to equal positive and negative lobe areas over 0..{:.1f} mm",
-                                                profile_options.max_radius_mm);
-  *out += fmt::format("\n### Balanced constants ({}; seed 000 eq. 14)\n\n| Parameter | Value | Std. dev. |\n|---|---:|---:|\n",
-                      balance);
-  *out += fmt::format("| c' (mm) | {:.4f} | ±{:.4f} |\n", profile.calibrated_focal_length_mm.value,
-                      profile.calibrated_focal_length_mm.sigma);
+  doc->Heading(3, fmt::format("Balanced constants ({}; seed 000 eq. 14)", BundleBalanceWords(result, index, options)));
+  TextTable& constants = doc->Table({"Parameter", "Value", "Std. dev."}, "lrr");
+  constants.rows.push_back({"c' (mm)", fmt::format("{:.4f}", profile.calibrated_focal_length_mm.value),
+                            fmt::format("±{:.4f}", profile.calibrated_focal_length_mm.sigma)});
   const char* names[4] = {"k0'", "k1' (mm^-2)", "k2' (mm^-4)", "k3' (mm^-6)"};
   for (int i = 0; i < 4; ++i) {
     const ValueWithSigma& k = profile.radial_coefficients[i];
-    if (k.value != 0.0 || k.sigma != 0.0) *out += fmt::format("| {} | {:.5e} | ±{:.3e} |\n", names[i], k.value, k.sigma);
+    if (k.value != 0.0 || k.sigma != 0.0) {
+      constants.rows.push_back({names[i], fmt::format("{:.5e}", k.value), fmt::format("±{:.3e}", k.sigma)});
+    }
   }
   if (std::isfinite(profile.phase_angle_rad.value)) {
-    *out += fmt::format("| decentering phase angle phi0 (deg, eq. 16) | {:.1f} | ±{:.1f} |\n",
-                        profile.phase_angle_rad.value * 180 / M_PI, profile.phase_angle_rad.sigma * 180 / M_PI);
+    constants.rows.push_back({"decentering phase angle phi0 (deg, eq. 16)",
+                              fmt::format("{:.1f}", profile.phase_angle_rad.value * 180 / M_PI),
+                              fmt::format("±{:.1f}", profile.phase_angle_rad.sigma * 180 / M_PI)});
   }
-  *out += "\n### Balanced symmetric radial and decentering distortion (seed 000 Table 2 form)\n\n"
-          "| r (mm) | δ'r (µm) | σδ'r (µm) | Pr (µm) | σPr (µm) |\n|---:|---:|---:|---:|---:|\n";
+  doc->Heading(3, "Balanced symmetric radial and decentering distortion (seed 000 Table 2 form)");
+  TextTable& rows = doc->Table({"r (mm)", "δ'r (µm)", "σδ'r (µm)", "Pr (µm)", "σPr (µm)"}, "rrrrr");
   for (const DistortionProfileRow& row : profile.rows) {
-    *out += fmt::format("| {:.2f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} |\n", row.r_mm, row.radial_um,
-                        row.radial_sigma_um, row.decentering_um, row.decentering_sigma_um);
+    rows.rows.push_back({fmt::format("{:.2f}", row.r_mm), fmt::format("{:.1f}", row.radial_um),
+                         fmt::format("{:.1f}", row.radial_sigma_um), fmt::format("{:.1f}", row.decentering_um),
+                         fmt::format("{:.1f}", row.decentering_sigma_um)});
   }
 }
 

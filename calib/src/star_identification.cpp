@@ -79,6 +79,10 @@ bool IdentificationOptions::Check(std::string* why) const {
            "false_alarm in (0, 1), at least 2 neighbours)";
     return false;
   }
+  if (!IsStellarLensModel(lens_model)) {
+    *why = "lens_model must be one of " + StellarLensModelNames();
+    return false;
+  }
   return true;
 }
 
@@ -88,6 +92,10 @@ IdentificationResult IdentifyStars(const std::vector<DetectedStarImage>& images,
   std::string why;
   if (!options.Check(&why)) throw Error("star identification", why);
   if (images.empty()) throw Error("star identification", "no star images");
+  if (static_cast<int>(camera.size()) != StellarCameraParamCount(options.lens_model))
+    throw Error("star identification", fmt::format("the camera does not have the {} values of a {} camera",
+                                                   StellarCameraParamCount(options.lens_model),
+                                                   DistortionModelName(options.lens_model)));
   if (!(camera[0] > 0)) throw Error("star identification", "the nominal principal distance must be positive");
   IdentificationResult result;
   result.reference_epoch = ReferenceEpoch(images, options.window_s);
@@ -105,7 +113,7 @@ IdentificationResult IdentifyStars(const std::vector<DetectedStarImage>& images,
   if (field.size() < 3) throw Error("star identification", "fewer than 3 catalog stars in the field of the pointing");
   const SkyRotation sky = FitSkyRotation(field, place, result.reference_epoch, span_s);
   FieldEpochs epochs;
-  const std::vector<PlateStar> stars = GroupImages(images, camera, result.reference_epoch, &epochs);
+  const std::vector<PlateStar> stars = GroupImages(images, camera, options.lens_model, result.reference_epoch, &epochs);
 
   const Hypothesis accepted = FindRotation(stars, field, sky, axis_enu.normalized(), options, &result);
   ObserveField(field, place, &epochs);

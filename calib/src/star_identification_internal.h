@@ -39,7 +39,8 @@ struct FieldEpochs {
   std::vector<std::vector<Eigen::Vector3d>> enu;  // [time][field star]
 };
 std::vector<PlateStar> GroupImages(const std::vector<DetectedStarImage>& images, const StellarCamera& camera,
-                                   const calib::UtcInstant& reference_epoch, FieldEpochs* epochs);
+                                   DistortionModelId lens, const calib::UtcInstant& reference_epoch,
+                                   FieldEpochs* epochs);
 void ObserveField(const std::vector<FieldStar>& field, const calib::ApparentPlaceOptions& place, FieldEpochs* epochs);
 
 struct Hypothesis {

@@ -1,4 +1,6 @@
-// The 11 stellar camera values from and to camera models (stellar_plate.h).
+// The stellar camera values from and to camera models, and the lens models'
+// names and sign freedom (stellar_plate.h, stellar_lens.h).
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -8,6 +10,9 @@
 
 namespace platemeter {
 namespace {
+
+constexpr DistortionModelId kStellarLenses[] = {DistortionModelId::kSlama, DistortionModelId::kSmacRadialDecentering,
+                                                DistortionModelId::kBrownConrady};
 
 // yp, ys and Phi_T change sign between the plate frame and seed 001's
 // printed left-handed frame (y down): the decentering term's
@@ -22,38 +27,81 @@ StellarCamera MirrorY(StellarCamera values) {
 
 }  // namespace
 
+bool IsStellarLensModel(DistortionModelId lens) {
+  return std::find(std::begin(kStellarLenses), std::end(kStellarLenses), lens) != std::end(kStellarLenses);
+}
+
+bool ParseStellarLensModel(const std::string& name, DistortionModelId* lens) {
+  DistortionModelId id;
+  if (!ParseDistortionModel(name, &id) || !IsStellarLensModel(id)) return false;
+  *lens = id;
+  return true;
+}
+
+std::string StellarLensModelNames() {
+  std::string names;
+  for (DistortionModelId id : kStellarLenses) names += (names.empty() ? "" : ", ") + std::string(DistortionModelName(id));
+  return names;
+}
+
+int StellarCameraParamCount(DistortionModelId lens) {
+  return VisitStellarLens(lens, [](auto model) { return 3 + decltype(model)::kNumParams; });
+}
+
+std::vector<std::string> StellarCameraParamNames(DistortionModelId lens) {
+  return VisitStellarLens(lens, [](auto model) {
+    std::vector<std::string> names = {"c_mm", "xp_mm", "yp_mm"};
+    for (const char* name : decltype(model)::kParamNames) names.push_back(name);
+    return names;
+  });
+}
+
+StellarDecenteringSign StellarDecenteringSignOf(DistortionModelId lens) {
+  switch (lens) {
+    case DistortionModelId::kSlama: return {{8, 9}, 10};                  // K4, K5, Phi_T
+    case DistortionModelId::kSmacRadialDecentering: return {{6, 7}, 8};   // J1, J2, theta0
+    default: return {};                                                   // Brown's p1, p2: none
+  }
+}
+
 StellarCamera StellarCameraFromModel(const CameraModel& model, bool printed_left_handed) {
-  if (model.model() != DistortionModelId::kSlama)
-    throw Error("stellar camera", "the lens model must be orbigon-11 (seed 001's 11 parameters)");
-  StellarCamera values{};
-  values[0] = model.interior().principal_distance_mm;
-  values[1] = model.interior().principal_point_x_mm;
-  values[2] = model.interior().principal_point_y_mm;
-  for (int i = 0; i < SlamaDistortion::kNumParams; ++i) values[3 + i] = model.params()[i];
+  if (!IsStellarLensModel(model.model()))
+    throw Error("stellar camera", fmt::format("the lens model must be one of {} (got {})", StellarLensModelNames(),
+                                              DistortionModelName(model.model())));
+  if (printed_left_handed && model.model() != DistortionModelId::kSlama)
+    throw Error("stellar camera", "only an orbigon-11 lens has seed 001's printed left-handed frame");
+  StellarCamera values = {model.interior().principal_distance_mm, model.interior().principal_point_x_mm,
+                          model.interior().principal_point_y_mm};
+  values.insert(values.end(), model.params().begin(), model.params().end());
   return printed_left_handed ? MirrorY(values) : values;
 }
 
-void CanonicalDecentering(StellarCamera* camera, Eigen::MatrixXd* matrix) {
-  constexpr int kK4 = 8, kK5 = 9, kPhi = 10;
-  if ((*camera)[kK4] < 0.0) {
-    (*camera)[kK4] = -(*camera)[kK4];
-    (*camera)[kK5] = -(*camera)[kK5];
-    (*camera)[kPhi] += M_PI;
+void CanonicalDecentering(StellarCamera* camera, Eigen::MatrixXd* matrix, DistortionModelId lens) {
+  const StellarDecenteringSign sign = StellarDecenteringSignOf(lens);
+  if (sign.angle < 0) return;
+  const int angle = sign.angle;
+  if ((*camera)[sign.amplitudes.front()] < 0.0) {
+    for (int k : sign.amplitudes) (*camera)[k] = -(*camera)[k];
+    (*camera)[angle] += M_PI;
     if (matrix != nullptr && matrix->size() > 0) {
-      for (int k : {kK4, kK5}) {
+      for (int k : sign.amplitudes) {
         matrix->row(k) *= -1.0;
         matrix->col(k) *= -1.0;
       }
     }
   }
-  (*camera)[kPhi] = std::remainder((*camera)[kPhi], 2 * M_PI);
-  if ((*camera)[kPhi] >= M_PI) (*camera)[kPhi] -= 2 * M_PI;
+  (*camera)[angle] = std::remainder((*camera)[angle], 2 * M_PI);
+  if ((*camera)[angle] >= M_PI) (*camera)[angle] -= 2 * M_PI;
 }
 
-StellarCamera StellarCameraToPrinted(const StellarCamera& plate_frame) { return MirrorY(plate_frame); }
+StellarCamera StellarCameraToPrinted(const StellarCamera& plate_frame) {
+  if (plate_frame.size() != kStellarCameraParams)
+    throw Error("stellar camera", "seed 001's printed frame holds orbigon-11 cameras only");
+  return MirrorY(plate_frame);
+}
 
-StellarCamera NominalStellarCamera(double principal_distance_mm) {
-  StellarCamera values{};
+StellarCamera NominalStellarCamera(double principal_distance_mm, DistortionModelId lens) {
+  StellarCamera values(StellarCameraParamCount(lens), 0.0);
   values[0] = principal_distance_mm;
   return values;
 }

@@ -16,31 +16,30 @@ namespace platemeter {
 namespace {
 
 using stellar_internal::CameraParameterFixed;
-using Matrix11 = Eigen::MatrixXd;
 
-constexpr int kPhi = 10;             // Phi_T: an angle, averaged on one branch
 constexpr int kMaxRelinearizations = 20;
 // The floor of the single-plate solves is ~1e-11 sigma.
 constexpr double kConvergedStepSigma = 1e-10;
 
-Eigen::VectorXd AsVector(const StellarCamera& c) { return Eigen::Map<const Eigen::VectorXd>(c.data(), c.size()); }
-StellarCamera AsCamera(const Eigen::VectorXd& v) {
-  StellarCamera c{};
-  for (int i = 0; i < kStellarCameraParams; ++i) c[i] = v[i];
-  return c;
+Eigen::VectorXd AsVector(const StellarCamera& c) {
+  return Eigen::Map<const Eigen::VectorXd>(c.data(), static_cast<Eigen::Index>(c.size()));
 }
+StellarCamera AsCamera(const Eigen::VectorXd& v) { return StellarCamera(v.data(), v.data() + v.size()); }
+
+// The decentering angle (Phi_T, theta0; -1 for Brown): averaged and differenced on one branch.
+int AngleIndex(const StellarOptions& options) { return StellarDecenteringSignOf(options.lens_model).angle; }
 
 // The free parameters: the rest stay at their values with zero rows.
 std::vector<int> FreeParameters(const StellarOptions& options) {
   std::vector<int> free;
-  for (int i = 0; i < kStellarCameraParams; ++i) {
+  for (int i = 0; i < StellarCameraParamCount(options.lens_model); ++i) {
     if (!CameraParameterFixed(options, i)) free.push_back(i);
   }
   return free;
 }
 
 // (sum N)^-1 over the free parameters, zero elsewhere; throws if singular.
-Matrix11 InverseOverFree(const Matrix11& n, const std::vector<int>& free) {
+Eigen::MatrixXd InverseOverFree(const Eigen::MatrixXd& n, const std::vector<int>& free) {
   const int k = static_cast<int>(free.size());
   Eigen::MatrixXd sub(k, k);
   for (int a = 0; a < k; ++a) {
@@ -50,40 +49,43 @@ Matrix11 InverseOverFree(const Matrix11& n, const std::vector<int>& free) {
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || ldlt.vectorD().minCoeff() <= 0.0)
     throw Error("stellar combination", "the plates' summed normal matrix is singular: the camera is not determined");
   const Eigen::MatrixXd inverse = ldlt.solve(Eigen::MatrixXd::Identity(k, k));
-  Matrix11 out = Matrix11::Zero(kStellarCameraParams, kStellarCameraParams);
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(n.rows(), n.cols());
   for (int a = 0; a < k; ++a) {
     for (int b = 0; b < k; ++b) out(free[a], free[b]) = inverse(a, b);
   }
   return out;
 }
 
-// Pope's one step: (sum N_i)^-1 sum N_i X_i, each Phi_T on the first plate's branch.
-Eigen::VectorXd OneStepMean(const std::vector<StellarPlateResult>& singles, const Matrix11& cofactor) {
-  Eigen::VectorXd sum = Eigen::VectorXd::Zero(kStellarCameraParams);
+// Pope's one step: (sum N_i)^-1 sum N_i X_i, each decentering angle on the first plate's branch.
+Eigen::VectorXd OneStepMean(const std::vector<StellarPlateResult>& singles, const Eigen::MatrixXd& cofactor,
+                            int angle) {
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(cofactor.rows());
   for (const StellarPlateResult& s : singles) {
     Eigen::VectorXd x = AsVector(s.camera);
-    x[kPhi] = singles.front().camera[kPhi] + std::remainder(x[kPhi] - singles.front().camera[kPhi], 2 * M_PI);
+    if (angle >= 0)
+      x[angle] = singles.front().camera[angle] + std::remainder(x[angle] - singles.front().camera[angle], 2 * M_PI);
     sum += s.camera_information * x;
   }
   return cofactor * sum;
 }
 
 PlateConsistency TestPlate(const StellarPlateResult& single, const StellarCombination& c, const Eigen::VectorXd& x,
-                           double alpha) {
+                           int angle, double alpha) {
   PlateConsistency t;
   t.plate_id = single.plate_id;
+  const int n = static_cast<int>(x.size());
   Eigen::VectorXd d = AsVector(single.camera) - x;
-  d[kPhi] = std::remainder(d[kPhi], 2 * M_PI);
+  if (angle >= 0) d[angle] = std::remainder(d[angle], 2 * M_PI);
   const std::vector<int> free = [&] {
     std::vector<int> f;
-    for (int i = 0; i < kStellarCameraParams; ++i) {
+    for (int i = 0; i < n; ++i) {
       if (single.camera_row[i] >= 0) f.push_back(i);
     }
     return f;
   }();
-  const Matrix11 q_single = InverseOverFree(single.camera_information, free);
+  const Eigen::MatrixXd q_single = InverseOverFree(single.camera_information, free);
   // Unit-diagonal scaling first: the parameters' sigmas span 12 orders of magnitude.
-  Eigen::VectorXd scale = Eigen::VectorXd::Ones(kStellarCameraParams);
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(n);
   for (int i : free) scale[i] = std::sqrt(q_single(i, i));
   d = d.cwiseQuotient(scale);
   const Eigen::MatrixXd difference =
@@ -91,7 +93,7 @@ PlateConsistency TestPlate(const StellarPlateResult& single, const StellarCombin
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(difference);
   const double largest = eigen.eigenvalues().cwiseAbs().maxCoeff();
   double quadratic = 0.0;
-  for (int i = 0; i < kStellarCameraParams; ++i) {
+  for (int i = 0; i < n; ++i) {
     const double lambda = eigen.eigenvalues()[i];
     if (!(lambda > 1e-10 * largest)) continue;
     const double projection = eigen.eigenvectors().col(i).dot(d);
@@ -113,10 +115,19 @@ StellarCombination CombineStellarPlates(const std::string& name, const std::vect
                                         const StellarCatalog& catalog, const StellarOptions& options) {
   if (plates.empty() || plates.size() != singles.size())
     throw Error("stellar combination", "needs the plates and their single-plate results, one for one");
+  std::string why;
+  if (!options.Check(&why)) throw Error("stellar options", why);
   const std::vector<int> free = FreeParameters(options);
+  const int n = StellarCameraParamCount(options.lens_model);
+  const int angle = AngleIndex(options);
+  for (const StellarPlateResult& s : singles) {
+    if (static_cast<int>(s.camera.size()) != n)
+      throw Error("stellar combination", fmt::format("plate {} was not adjusted with the {} lens", s.plate_id,
+                                                     DistortionModelName(options.lens_model)));
+  }
   StellarCombination c;
   c.name = name;
-  Matrix11 n_sum = Matrix11::Zero(kStellarCameraParams, kStellarCameraParams);
+  Eigen::MatrixXd n_sum = Eigen::MatrixXd::Zero(n, n);
   double dof_sum = 0.0, vtpv_before = 0.0, unit2_sum = 0.0;
   for (const StellarPlateResult& s : singles) {
     c.plate_ids.push_back(s.plate_id);
@@ -126,7 +137,7 @@ StellarCombination CombineStellarPlates(const std::string& name, const std::vect
     unit2_sum += s.unit_sigma_um * s.unit_sigma_um * s.adjustment.dof;
   }
   const double unit_sigma_um = std::sqrt(unit2_sum / dof_sum);
-  Eigen::VectorXd x = OneStepMean(singles, InverseOverFree(n_sum, free));
+  Eigen::VectorXd x = OneStepMean(singles, InverseOverFree(n_sum, free), angle);
   const Eigen::VectorXd one_step = x;
 
   std::vector<stellar_internal::PreparedPlate> prepared;
@@ -145,7 +156,7 @@ StellarCombination CombineStellarPlates(const std::string& name, const std::vect
       lin[i] = stellar_internal::LinearizePlate(plates[i], prepared[i], states[i], AsCamera(x), options);
     });
     n_sum.setZero();
-    Eigen::VectorXd b_sum = Eigen::VectorXd::Zero(kStellarCameraParams);
+    Eigen::VectorXd b_sum = Eigen::VectorXd::Zero(n);
     for (const auto& l : lin) n_sum += l.n, b_sum += l.b;
     c.cofactor = InverseOverFree(n_sum, free);
     const Eigen::VectorXd step = -c.cofactor * b_sum;
@@ -160,12 +171,13 @@ StellarCombination CombineStellarPlates(const std::string& name, const std::vect
                                                    kMaxRelinearizations));
   // The last step is below 1e-10 sigma: the statistics at the penultimate point are those of x.
   c.camera = AsCamera(x);
-  CanonicalDecentering(&c.camera, &c.cofactor);
+  CanonicalDecentering(&c.camera, &c.cofactor, options.lens_model);
   x = AsVector(c.camera);
   c.vtpv = 0.0;
   for (const auto& l : lin) c.vtpv += l.vtpv;
   c.dof = dof_sum + static_cast<double>(free.size()) * (static_cast<double>(plates.size()) - 1.0);
   c.m_0 = std::sqrt(c.vtpv / c.dof);
+  c.camera_sigma.assign(n, 0.0);
   for (int i : free) {
     c.camera_sigma[i] = c.m_0 * std::sqrt(c.cofactor(i, i));
     c.one_step_offset_sigma =
@@ -174,7 +186,7 @@ StellarCombination CombineStellarPlates(const std::string& name, const std::vect
   c.m_p_um = std::sqrt(vtpv_before / dof_sum) * unit_sigma_um;
   c.m_p_after_um = std::sqrt(c.vtpv / dof_sum) * unit_sigma_um;
   for (const StellarPlateResult& s : singles)
-    c.consistency.push_back(TestPlate(s, c, x, options.adjustment.significance_level));
+    c.consistency.push_back(TestPlate(s, c, x, angle, options.adjustment.significance_level));
   return c;
 }
 
@@ -183,6 +195,7 @@ AdjustmentResult SolveStellarPlatesSimultaneously(const std::vector<StellarPlate
                                                   const StellarOptions& options) {
   std::string why;
   if (!options.Check(&why)) throw Error("stellar options", why);
+  stellar_internal::CheckCamera(initial, options, "stellar combination");
   AdjustmentProblem problem;
   const int camera = stellar_internal::AddCameraBlock("camera", initial, options, &problem);
   for (const StellarPlate& plate : plates) {

@@ -18,13 +18,11 @@ using stellar_internal::PlateBlocks;
 using stellar_internal::PreparedPlate;
 
 void CheckInput(const std::vector<std::string>& names, const std::vector<StellarCamera>& initial,
-                const std::vector<InterlockExposure>& exposures) {
+                const std::vector<InterlockExposure>& exposures, const StellarOptions& options) {
   const std::string subject = "interlock";
   if (names.size() < 2) throw Error(subject, "needs at least two cameras");
   if (initial.size() != names.size()) throw Error(subject, "needs one starting camera per camera name");
-  for (const StellarCamera& camera : initial) {
-    if (!(camera[0] > 0.0)) throw Error(subject, "the initial principal distance must be positive");
-  }
+  for (const StellarCamera& camera : initial) stellar_internal::CheckCamera(camera, options, subject);
   if (exposures.empty()) throw Error(subject, "has no exposures");
   std::set<std::string> plate_ids;
   std::vector<int> seen(names.size(), 0);
@@ -47,22 +45,23 @@ void CheckInput(const std::vector<std::string>& names, const std::vector<Stellar
   }
 }
 
-// camera k's result: values and scaled sigmas (K4 >= 0), counts, residual RMS.
+// camera k's result: values and scaled sigmas (canonical decentering), counts, residual RMS.
 InterlockCameraResult CameraResult(const std::string& name, const std::string& label,
                                    const std::vector<std::pair<const StellarPlate*, const PreparedPlate*>>& plates,
-                                   const AdjustmentResult& adjustment) {
+                                   DistortionModelId lens, const AdjustmentResult& adjustment) {
   InterlockCameraResult out;
   out.name = name;
   std::vector<int> indices;
-  for (int i = 0; i < kStellarCameraParams; ++i) {
-    const int k = adjustment.Find(label, kStellarCameraParamNames[i]);
-    if (k < 0) throw Error("interlock", fmt::format("internal: no parameter '{} {}'", label, kStellarCameraParamNames[i]));
+  for (const std::string& parameter : StellarCameraParamNames(lens)) {
+    const int k = adjustment.Find(label, parameter);
+    if (k < 0) throw Error("interlock", fmt::format("internal: no parameter '{} {}'", label, parameter));
     indices.push_back(k);
-    out.camera[i] = adjustment.parameters[k].value;
+    out.camera.push_back(adjustment.parameters[k].value);
   }
   Eigen::MatrixXd covariance = adjustment.Covariance(indices);
-  CanonicalDecentering(&out.camera, &covariance);
-  for (int i = 0; i < kStellarCameraParams; ++i) out.camera_sigma[i] = std::sqrt(std::max(0.0, covariance(i, i)));
+  CanonicalDecentering(&out.camera, &covariance, lens);
+  for (size_t i = 0; i < indices.size(); ++i)
+    out.camera_sigma.push_back(std::sqrt(std::max(0.0, covariance(i, i))));
   std::set<std::string> groups;
   for (const auto& [plate, prepared] : plates) {
     ++out.plates;
@@ -110,7 +109,7 @@ StellarInterlockResult RunStellarInterlock(const std::vector<std::string>& names
                                            const AdjustmentProgress& progress) {
   std::string why;
   if (!options.Check(&why)) throw Error("stellar options", why);
-  CheckInput(names, initial, exposures);
+  CheckInput(names, initial, exposures, options);
   const size_t cameras = names.size();
 
   // Prepared plates by exposure and camera; each interlock starts from the
@@ -157,7 +156,8 @@ StellarInterlockResult RunStellarInterlock(const std::vector<std::string>& names
   out.exposures = static_cast<int>(exposures.size());
   out.adjustment = problem.Solve(options.adjustment, progress);
   for (size_t k = 0; k < cameras; ++k) {
-    out.cameras.push_back(CameraResult(names[k], "camera " + names[k], plates_of[k], out.adjustment));
+    out.cameras.push_back(
+        CameraResult(names[k], "camera " + names[k], plates_of[k], options.lens_model, out.adjustment));
     if (k > 0) {
       out.interlocks.push_back(
           InterlockResult(names[0], names[k], fmt::format("interlock {} to {}", names[0], names[k]), out.adjustment));

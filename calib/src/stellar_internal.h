@@ -1,7 +1,7 @@
 #pragma once
 // Inside the stellar calibration (stellar_plate.h): each image's apparent
-// direction, the observation equation, and the plate's problem as the single
-// plate and the combination both build it.
+// direction (the observation equation is in stellar_equation.h), and the
+// plate's problem as the single plate and the combination both build it.
 #include <memory>
 #include <string>
 #include <vector>
@@ -9,94 +9,16 @@
 #include <Eigen/Core>
 #include <ceres/ceres.h>
 
-#include "platemeter/calib/distortion_models.h"
-#include "platemeter/calib/rotations.h"
 #include "platemeter/calib/stellar_plate.h"
+#include "stellar_equation.h"
 
 namespace platemeter::stellar_internal {
-
-// A star's apparent direction at one image's mid-time in the site's local
-// frame, and its derivatives with respect to the star's catalog place moved
-// east and north by an arc (radians): direction(e, n) ~ enu + e d_east + n d_north.
-struct ImageDirection {
-  Eigen::Vector3d enu = Eigen::Vector3d::UnitZ();
-  Eigen::Vector3d d_east = Eigen::Vector3d::Zero();
-  Eigen::Vector3d d_north = Eigen::Vector3d::Zero();
-};
 
 // Directions of `stars[i]` at `times[i]` (one ERFA set-up per distinct time,
 // times in parallel).
 std::vector<ImageDirection> ComputeImageDirections(const calib::ApparentPlaceOptions& place,
                                                    const std::vector<const calib::CatalogStar*>& stars,
                                                    const std::vector<calib::UtcInstant>& times);
-
-// Seed 001's image equation, model minus measured, mm. Blocks: camera (11,
-// kStellarCameraParamNames), orientation set (omega, phi, kappa rad: a small
-// rotation after the set's starting rotation m0, seed 004's sequence),
-// deformation (s, epsilon_rad), star correction (east_rad, north_rad).
-struct StellarImageEquation {
-  double x_mm = 0.0, y_mm = 0.0;
-  Eigen::Matrix3d m0 = Eigen::Matrix3d::Identity();  // camera_from_enu the set starts from
-  ImageDirection direction;
-
-  template <typename T>
-  bool operator()(const T* camera, const T* orientation, const T* deformation, const T* star,
-                  T* residual_mm) const {
-    T r[9];
-    OmegaPhiKappaMatrixT(orientation[0], orientation[1], orientation[2], r);
-    return Residual(camera, r, deformation, star, residual_mm);
-  }
-  // The same with the camera's rotation r (row-major) after m0 given.
-  template <typename T>
-  bool Residual(const T* camera, const T* r, const T* deformation, const T* star, T* residual_mm) const {
-    T d[3];
-    for (int i = 0; i < 3; ++i) {
-      d[i] = T(direction.enu[i]) + T(direction.d_east[i]) * star[0] + T(direction.d_north[i]) * star[1];
-    }
-    T v[3];
-    for (int i = 0; i < 3; ++i) v[i] = T(m0(i, 0)) * d[0] + T(m0(i, 1)) * d[1] + T(m0(i, 2)) * d[2];
-    const T m = r[0] * v[0] + r[1] * v[1] + r[2] * v[2];
-    const T n = r[3] * v[0] + r[4] * v[1] + r[5] * v[2];
-    const T q = r[6] * v[0] + r[7] * v[1] + r[8] * v[2];
-    if (!(q > T(0.0))) return false;
-    const T cx = camera[0] * (T(1.0) + deformation[0]);
-    const T cy = camera[0] * (T(1.0) - deformation[0]);
-    T x, y;
-    SlamaImageEquation(camera + 3, cx, cy, camera[1], camera[2], deformation[1], m, n, q, &x, &y);
-    residual_mm[0] = x - T(x_mm);
-    residual_mm[1] = y - T(y_mm);
-    return true;
-  }
-  static ceres::CostFunction* Create(const StellarImageEquation& equation) {
-    return new ceres::AutoDiffCostFunction<StellarImageEquation, 2, kStellarCameraParams, 3, 2, 2>(
-        new StellarImageEquation(equation));
-  }
-};
-
-// An image of a camera interlocked with the reference camera of its exposure
-// (stellar_interlock.h): m0 and the orientation set are the reference plate's,
-// and the interlock's rotation M = R3(kappa) R2(phi) R1(omega) follows them.
-// Blocks: camera, reference orientation set, interlock (omega, phi, kappa
-// rad), deformation, star.
-struct InterlockedImageEquation {
-  StellarImageEquation image;
-
-  template <typename T>
-  bool operator()(const T* camera, const T* orientation, const T* interlock, const T* deformation, const T* star,
-                  T* residual_mm) const {
-    T a[9], b[9], r[9];
-    OmegaPhiKappaMatrixT(interlock[0], interlock[1], interlock[2], a);
-    OmegaPhiKappaMatrixT(orientation[0], orientation[1], orientation[2], b);
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) r[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
-    }
-    return image.Residual(camera, r, deformation, star, residual_mm);
-  }
-  static ceres::CostFunction* Create(const StellarImageEquation& equation) {
-    return new ceres::AutoDiffCostFunction<InterlockedImageEquation, 2, kStellarCameraParams, 3, 3, 2, 2>(
-        new InterlockedImageEquation{equation});
-  }
-};
 
 // One plate prepared for adjustment: every usable image with its direction,
 // its orientation set and its star.
@@ -168,8 +90,8 @@ PlateState InitialPlateState(const PreparedPlate& prepared, const StellarPlateRe
 // vtpv of the used equations; what the back-substitution needs is kept.
 // Rows and columns of fixed parameters are zero (options).
 struct PlateLinearization {
-  Eigen::MatrixXd n;  // 11 x 11
-  Eigen::VectorXd b;  // 11
+  Eigen::MatrixXd n;  // n x n, n camera values
+  Eigen::VectorXd b;  // n
   double vtpv = 0.0;
   // Back-substitution: the star-reduced system of g = (camera | sets | deformation) ...
   Eigen::MatrixXd n_gg;
@@ -186,5 +108,8 @@ void StepPlate(const PlateLinearization& lin, const Eigen::VectorXd& camera_step
 
 // Whether camera parameter i is held fixed by the options.
 bool CameraParameterFixed(const StellarOptions& options, int i);
+// Throws platemeter::Error(subject, ...) unless `camera` has the options'
+// lens model's count of finite values and a positive principal distance.
+void CheckCamera(const StellarCamera& camera, const StellarOptions& options, const std::string& subject);
 
 }  // namespace platemeter::stellar_internal

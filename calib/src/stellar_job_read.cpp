@@ -121,12 +121,18 @@ void ReadOptions(const JobReader& r, const toml::table& root, StellarJob* job) {
   // Data snooping (a robust first pass, Bonferroni rejection) unless switched off.
   const bool robust = root.get("robust") ? r.Bool(*root.get("robust"), "robust") : true;
   job->options.adjustment.robust_loss_scale = robust ? kRobustScaleSigma : 0.0;
+  if (const toml::node* n = root.get("lens_model")) {
+    const std::string name = r.String(*n, "lens_model");
+    if (!ParseStellarLensModel(name, &job->options.lens_model))
+      r.Fail(n, "lens_model: '" + name + "' is not one of " + StellarLensModelNames());
+  }
+  // The names of the chosen model (read after lens_model).
   if (const toml::node* n = root.get("fixed")) {
+    const std::vector<std::string> names = StellarCameraParamNames(job->options.lens_model);
     for (const auto& [name, node] : r.Strings(*n, "fixed")) {
-      if (std::find(kStellarCameraParamNames.begin(), kStellarCameraParamNames.end(), name) ==
-          kStellarCameraParamNames.end())
-        r.Fail(node, "unknown camera parameter '" + name + "' (known: c_mm, xp_mm, yp_mm, xs_mm, ys_mm, K1_per_m2, "
-                     "K2_per_m4, K3_per_m6, K4_per_m, K5_per_m3, Phi_T_rad)");
+      if (std::find(names.begin(), names.end(), name) == names.end())
+        r.Fail(node, "unknown " + std::string(DistortionModelName(job->options.lens_model)) + " camera parameter '" +
+                         name + "' (known: " + Join(names) + ")");
       job->options.camera_states[name] = ParameterState::Fixed();
     }
   }
@@ -145,7 +151,7 @@ StellarJob ReadStellarJob(const std::string& path, const DefinitionRegistry& reg
   }
   const JobReader r(path, "docs/stellar-job.md");
   r.CheckKeys(root, "", {"title", "camera", "catalog", "magnitude_limit", "catalog_sigma_arcsec", "identify",
-                         "orientation_sets", "deformation", "robust", "fixed", "kinds", "pointing_tolerance_deg",
+                         "orientation_sets", "deformation", "robust", "lens_model", "fixed", "kinds", "pointing_tolerance_deg",
                          "site", "plate"});
   StellarJob job;
   job.path = path;

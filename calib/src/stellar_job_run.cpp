@@ -42,7 +42,9 @@ IdentificationResult IdentifyPlate(const StellarJob& job, const StellarJobPlate&
   for (const StarImageObservation& o : p.plate.images) {
     if (!catalog.count(o.star_id)) images.push_back({o.star_id, o.mid_time, o.x_mm, o.y_mm});
   }
-  IdentificationResult r = IdentifyStars(images, catalog, p.plate.place, AxisEnu(p), camera, job.identification);
+  IdentificationOptions options = job.identification;
+  options.lens_model = job.options.lens_model;
+  IdentificationResult r = IdentifyStars(images, catalog, p.plate.place, AxisEnu(p), camera, options);
   for (StarImageObservation& o : plate->images) {
     if (catalog.count(o.star_id)) continue;
     auto it = r.catalog_id.find(o.star_id);
@@ -51,16 +53,21 @@ IdentificationResult IdentifyPlate(const StellarJob& job, const StellarJobPlate&
   return r;
 }
 
-StellarCamera InitialCamera(const CameraDefinition& camera, bool* printed_left_handed) {
+// The starting camera in the job's lens model: the definition's lens if it is
+// of that model (orbigon-11: in seed 001's printed frame), else its nominal
+// principal distance with no distortion.
+StellarCamera InitialCamera(const CameraDefinition& camera, DistortionModelId lens, bool* printed_left_handed) {
   *printed_left_handed = false;
-  if (camera.lens && camera.lens->model == "orbigon-11") {
-    *printed_left_handed = true;  // seed 001's printed frame (docs/stellar.md)
-    return StellarCameraFromModel(CameraModelFromLensCalibration(*camera.lens, "camera " + camera.name), true);
+  if (camera.lens && camera.lens->model == DistortionModelName(lens)) {
+    *printed_left_handed = lens == DistortionModelId::kSlama;  // seed 001's printed frame (docs/stellar.md)
+    return StellarCameraFromModel(CameraModelFromLensCalibration(*camera.lens, "camera " + camera.name),
+                                  *printed_left_handed);
   }
-  if (camera.nominal_principal_distance_mm > 0.0) return NominalStellarCamera(camera.nominal_principal_distance_mm);
-  throw Error("camera " + camera.name, "has neither an orbigon-11 lens nor a nominal principal distance to start from");
+  if (camera.nominal_principal_distance_mm > 0.0)
+    return NominalStellarCamera(camera.nominal_principal_distance_mm, lens);
+  throw Error("camera " + camera.name, fmt::format("has neither an {} lens nor a nominal principal distance to start from",
+                                                   DistortionModelName(lens)));
 }
-
 
 // The joint adjustment of the cameras over the exposures that show camera 0
 // and at least one other camera; nullopt when there is none.
@@ -119,7 +126,7 @@ StellarJobResult RunStellarJob(const StellarJob& job, const AdjustmentProgress& 
   StellarJobResult out;
   for (const CameraDefinition& camera : job.cameras) {
     bool printed = false;
-    out.initial.push_back(InitialCamera(camera, &printed));
+    out.initial.push_back(InitialCamera(camera, job.options.lens_model, &printed));
     out.printed_left_handed.push_back(printed);
   }
   out.catalog = LoadCatalog(job);

@@ -16,16 +16,17 @@ namespace {
 
 // The image equation's whitened Jacobian blocks and residual at the state.
 struct Linearized {
-  Eigen::Matrix<double, 2, kStellarCameraParams, Eigen::RowMajor> camera;
+  Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> camera;
   Eigen::Matrix<double, 2, 3, Eigen::RowMajor> set;
   Eigen::Matrix<double, 2, 2, Eigen::RowMajor> deformation, star;
   Eigen::Vector2d residual;
 };
 
 bool LinearizeImage(const StellarPlate& plate, const PreparedImage& image, const PlateState& state,
-                    const StellarCamera& camera, Linearized* out) {
+                    const StellarCamera& camera, DistortionModelId lens, Linearized* out) {
   const StarImageObservation& source = plate.images[image.source];
-  const std::unique_ptr<ceres::CostFunction> cost(StellarImageEquation::Create(image.equation));
+  const std::unique_ptr<ceres::CostFunction> cost(CreateStellarImageCost(lens, image.equation));
+  out->camera.resize(2, static_cast<Eigen::Index>(camera.size()));
   const double* parameters[4] = {camera.data(), state.sets[image.set].data(), state.deformation.data(),
                                  state.stars[image.star].data()};
   double* jacobians[4] = {out->camera.data(), out->set.data(), out->deformation.data(), out->star.data()};
@@ -42,7 +43,7 @@ bool LinearizeImage(const StellarPlate& plate, const PreparedImage& image, const
 }  // namespace
 
 bool CameraParameterFixed(const StellarOptions& options, int i) {
-  auto it = options.camera_states.find(kStellarCameraParamNames[i]);
+  auto it = options.camera_states.find(StellarCameraParamNames(options.lens_model)[i]);
   return it != options.camera_states.end() && it->second.kind == ParameterState::Kind::kFixed;
 }
 
@@ -74,8 +75,9 @@ PlateState InitialPlateState(const PreparedPlate& prepared, const StellarPlateRe
 PlateLinearization LinearizePlate(const StellarPlate& plate, const PreparedPlate& prepared, const PlateState& state,
                                   const StellarCamera& camera, const StellarOptions& options) {
   const int num_sets = static_cast<int>(prepared.set_m0.size());
-  const int m = kStellarCameraParams + 3 * num_sets + 2;  // camera | sets | deformation
-  const int deformation_offset = kStellarCameraParams + 3 * num_sets;
+  const int k = static_cast<int>(camera.size());
+  const int m = k + 3 * num_sets + 2;  // camera | sets | deformation
+  const int deformation_offset = k + 3 * num_sets;
   const int num_stars = static_cast<int>(prepared.stars.size());
   PlateLinearization out;
   out.n_gg = Eigen::MatrixXd::Zero(m, m);
@@ -94,13 +96,13 @@ PlateLinearization LinearizePlate(const StellarPlate& plate, const PreparedPlate
   }
   Linearized x;
   Eigen::MatrixXd j_g = Eigen::MatrixXd::Zero(2, m);
-  for (size_t k = 0; k < prepared.images.size(); ++k) {
-    const PreparedImage& image = prepared.images[k];
-    if (!state.used[k] || !LinearizeImage(plate, image, state, camera, &x)) continue;
+  for (size_t i = 0; i < prepared.images.size(); ++i) {
+    const PreparedImage& image = prepared.images[i];
+    if (!state.used[i] || !LinearizeImage(plate, image, state, camera, options.lens_model, &x)) continue;
     ++images_in_set[image.set];
     j_g.setZero();
-    j_g.leftCols(kStellarCameraParams) = x.camera;
-    j_g.middleCols(kStellarCameraParams + 3 * image.set, 3) = x.set;
+    j_g.leftCols(k) = x.camera;
+    j_g.middleCols(k + 3 * image.set, 3) = x.set;
     j_g.middleCols(deformation_offset, 2) = x.deformation;
     out.n_gg.noalias() += j_g.transpose() * j_g;
     out.b_g.noalias() += j_g.transpose() * x.residual;
@@ -117,16 +119,16 @@ PlateLinearization LinearizePlate(const StellarPlate& plate, const PreparedPlate
   }
   // Fixed parameters drop out: zero rows and columns, a unit diagonal for the plate's own.
   for (int i = 0; i < m; ++i) {
-    const bool fixed = i < kStellarCameraParams ? CameraParameterFixed(options, i)
+    const bool fixed = i < k ? CameraParameterFixed(options, i)
                        : i >= deformation_offset ? !options.deformation
-                                                 : images_in_set[(i - kStellarCameraParams) / 3] == 0;
+                                                 : images_in_set[(i - k) / 3] == 0;
     if (!fixed) continue;
     out.n_gg.row(i).setZero();
     out.n_gg.col(i).setZero();
     out.b_g[i] = 0.0;
-    if (i >= kStellarCameraParams) out.n_gg(i, i) = 1.0;
+    if (i >= k) out.n_gg(i, i) = 1.0;
   }
-  const int k = kStellarCameraParams, p = m - k;
+  const int p = m - k;
   const Eigen::LDLT<Eigen::MatrixXd> n_pp(out.n_gg.bottomRightCorner(p, p));
   const Eigen::MatrixXd n_cp = out.n_gg.topRightCorner(k, p);
   out.n = out.n_gg.topLeftCorner(k, k) - n_cp * n_pp.solve(n_cp.transpose());
@@ -135,7 +137,7 @@ PlateLinearization LinearizePlate(const StellarPlate& plate, const PreparedPlate
 }
 
 void StepPlate(const PlateLinearization& lin, const Eigen::VectorXd& camera_step, PlateState* state) {
-  const int k = kStellarCameraParams, p = static_cast<int>(lin.n_gg.rows()) - k;
+  const int k = static_cast<int>(camera_step.size()), p = static_cast<int>(lin.n_gg.rows()) - k;
   const Eigen::VectorXd step_p = -Eigen::LDLT<Eigen::MatrixXd>(lin.n_gg.bottomRightCorner(p, p))
                                       .solve(lin.b_g.tail(p) + lin.n_gg.bottomLeftCorner(p, k) * camera_step);
   Eigen::VectorXd step_g(k + p);

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "platemeter/core/error.h"
 #include "stellar_internal.h"
@@ -82,20 +83,20 @@ void FillDeformation(const AdjustmentResult& result, const std::string& plate_id
 }
 
 StellarPlateResult ReadResult(const StellarPlate& plate, const PreparedPlate& prepared, const PlateBlocks& blocks,
-                              const std::string& camera_label, AdjustmentResult adjustment) {
+                              const std::string& camera_label, DistortionModelId lens, AdjustmentResult adjustment) {
   StellarPlateResult out;
   out.plate_id = plate.id;
   out.group = plate.group;
   std::vector<int> camera_indices;
-  for (int i = 0; i < kStellarCameraParams; ++i) {
-    const int k = Index(adjustment, camera_label, kStellarCameraParamNames[i]);
+  for (const std::string& name : StellarCameraParamNames(lens)) {
+    const int k = Index(adjustment, camera_label, name);
     camera_indices.push_back(k);
-    out.camera[i] = adjustment.parameters[k].value;
-    out.camera_sigma[i] = SigmaOf(adjustment, k);
-    out.camera_row[i] = adjustment.covariance_row[k];
+    out.camera.push_back(adjustment.parameters[k].value);
+    out.camera_sigma.push_back(SigmaOf(adjustment, k));
+    out.camera_row.push_back(adjustment.covariance_row[k]);
   }
   out.camera_information = InformationOf(adjustment, camera_indices);
-  CanonicalDecentering(&out.camera, &out.camera_information);
+  CanonicalDecentering(&out.camera, &out.camera_information, lens);
   FillDeformation(adjustment, plate.id, camera_indices[0], &out);
   for (size_t j = 0; j < blocks.sets.size(); ++j) {
     if (blocks.sets[j] < 0) continue;
@@ -130,10 +131,15 @@ bool StellarOptions::Check(std::string* why) const {
     *why = fmt::format("orientation_sets must be 1, 2 or 3 (got {})", orientation_sets);
     return false;
   }
+  if (!IsStellarLensModel(lens_model)) {
+    *why = fmt::format("lens_model must be one of {} (got {})", StellarLensModelNames(), DistortionModelName(lens_model));
+    return false;
+  }
+  const std::vector<std::string> names = StellarCameraParamNames(lens_model);
   for (const auto& [name, state] : camera_states) {
-    if (std::find(kStellarCameraParamNames.begin(), kStellarCameraParamNames.end(), name) ==
-        kStellarCameraParamNames.end()) {
-      *why = fmt::format("unknown camera parameter '{}' (expected one of c_mm, xp_mm, ... Phi_T_rad)", name);
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+      *why = fmt::format("unknown {} camera parameter '{}' (expected one of {})", DistortionModelName(lens_model), name,
+                         fmt::join(names, ", "));
       return false;
     }
   }
@@ -146,13 +152,14 @@ StellarPlateResult RunStellarPlate(const StellarPlate& plate, const StellarCatal
                                    const AdjustmentProgress& progress) {
   std::string why;
   if (!options.Check(&why)) throw Error("stellar options", why);
-  if (!(initial[0] > 0.0)) throw Error("stellar calibration", "the initial principal distance must be positive");
+  stellar_internal::CheckCamera(initial, options, "stellar calibration");
   const PreparedPlate prepared = stellar_internal::PreparePlate(plate, catalog, initial, options, approx_camera_from_enu);
   AdjustmentProblem problem;
   const std::string camera_label = "camera";
   const int camera = stellar_internal::AddCameraBlock(camera_label, initial, options, &problem);
   const PlateBlocks blocks = stellar_internal::AddPlateToProblem(plate, prepared, options, camera, &problem);
-  return ReadResult(plate, prepared, blocks, camera_label, problem.Solve(options.adjustment, progress));
+  return ReadResult(plate, prepared, blocks, camera_label, options.lens_model,
+                    problem.Solve(options.adjustment, progress));
 }
 
 }  // namespace platemeter

@@ -15,7 +15,7 @@ namespace platemeter::stellar_internal {
 namespace {
 
 constexpr double kArcsecToRad = M_PI / (180.0 * 3600.0);
-constexpr int kMinCatalogStars = 8;         // a rotation and 11 camera parameters need several stars
+constexpr int kMinCatalogStars = 8;         // a rotation and 8 to 11 camera parameters need several stars
 constexpr int kMinUnknownStarImages = 3;    // fewer add no redundancy to the camera
 
 double SecondsBetween(const calib::UtcInstant& a, const calib::UtcInstant& b) {

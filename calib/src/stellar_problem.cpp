@@ -1,5 +1,7 @@
 // A plate's blocks and equations in an engine problem (stellar_internal.h):
 // shared by the single-plate adjustment and the simultaneous solution.
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include "platemeter/core/error.h"
@@ -7,14 +9,24 @@
 
 namespace platemeter::stellar_internal {
 
+void CheckCamera(const StellarCamera& camera, const StellarOptions& options, const std::string& subject) {
+  const int expected = StellarCameraParamCount(options.lens_model);
+  if (static_cast<int>(camera.size()) != expected)
+    throw Error(subject, fmt::format("a {} camera has {} values (got {})", DistortionModelName(options.lens_model),
+                                     expected, camera.size()));
+  for (double v : camera) {
+    if (!std::isfinite(v)) throw Error(subject, "the starting camera has a non-finite value");
+  }
+  if (!(camera[0] > 0.0)) throw Error(subject, "the initial principal distance must be positive");
+}
+
 int AddCameraBlock(const std::string& label, const StellarCamera& values, const StellarOptions& options,
                    AdjustmentProblem* problem) {
-  const std::vector<std::string> names(kStellarCameraParamNames.begin(), kStellarCameraParamNames.end());
-  const int block = problem->AddBlock(label, "camera", BlockKind::kGlobal, names,
-                                      std::vector<double>(values.begin(), values.end()));
-  for (int i = 0; i < kStellarCameraParams; ++i) {
-    auto it = options.camera_states.find(kStellarCameraParamNames[i]);
-    problem->SetState(block, i, it == options.camera_states.end() ? ParameterState::Free() : it->second);
+  const std::vector<std::string> names = StellarCameraParamNames(options.lens_model);
+  const int block = problem->AddBlock(label, "camera", BlockKind::kGlobal, names, values);
+  for (size_t i = 0; i < names.size(); ++i) {
+    auto it = options.camera_states.find(names[i]);
+    problem->SetState(block, static_cast<int>(i), it == options.camera_states.end() ? ParameterState::Free() : it->second);
   }
   return block;
 }
@@ -76,7 +88,7 @@ PlateBlocks AddPlateToProblem(const StellarPlate& plate, const PreparedPlate& pr
   AddImages(
       plate, prepared,
       [&](const PreparedImage& image) {
-        return std::make_pair(StellarImageEquation::Create(image.equation),
+        return std::make_pair(CreateStellarImageCost(options.lens_model, image.equation),
                               std::vector<int>{camera, blocks.sets[image.set], blocks.deformation,
                                                blocks.stars[image.star]});
       },
@@ -99,7 +111,7 @@ PlateBlocks AddInterlockedPlateToProblem(const StellarPlate& plate, const Prepar
   AddImages(
       plate, prepared,
       [&](const PreparedImage& image) {
-        return std::make_pair(InterlockedImageEquation::Create(image.equation),
+        return std::make_pair(CreateInterlockedImageCost(options.lens_model, image.equation),
                               std::vector<int>{camera, reference.sets[image.set], interlock, blocks.deformation,
                                                blocks.stars[image.star]});
       },

@@ -1,4 +1,4 @@
-// calibration.json, the CSV files, the calibrated camera and the writing of
+// calibration.json, the CSV files and the writing of
 // a stellar calibration job's outputs (stellar_report.h).
 #include <algorithm>
 #include <cmath>
@@ -16,21 +16,24 @@ namespace platemeter {
 namespace {
 
 using nlohmann::ordered_json;
-constexpr double kRadToDeg = 180.0 / M_PI;
 
-ordered_json CameraJson(const StellarCamera& values, const StellarCamera& sigmas) {
+// The plate frame with the lens model's names; an orbigon-11 camera in seed 001's printed frame too.
+ordered_json CameraJson(DistortionModelId lens, const StellarCamera& values, const StellarCamera& sigmas) {
   ordered_json j;
   ordered_json plate = ordered_json::object();
-  for (int i = 0; i < kStellarCameraParams; ++i) plate[kStellarCameraParamNames[i]] = {{"value", values[i]}, {"sigma", sigmas[i]}};
-  const PrintedCamera p = ToPrinted(values, sigmas);
-  ordered_json printed = ordered_json::object();
-  for (int i = 0; i < kStellarCameraParams; ++i) printed[kPrintedCameraNames[i]] = {{"value", p.value[i]}, {"sigma", p.sigma[i]}};
+  const std::vector<std::string> names = StellarCameraParamNames(lens);
+  for (size_t i = 0; i < names.size(); ++i) plate[names[i]] = {{"value", values[i]}, {"sigma", sigmas[i]}};
   j["plate_frame"] = plate;
-  j["seed001_printed_frame"] = printed;
+  if (lens == DistortionModelId::kSlama) {
+    const PrintedCamera p = ToPrinted(values, sigmas);
+    ordered_json printed = ordered_json::object();
+    for (int i = 0; i < kStellarCameraParams; ++i) printed[kPrintedCameraNames[i]] = {{"value", p.value[i]}, {"sigma", p.sigma[i]}};
+    j["seed001_printed_frame"] = printed;
+  }
   return j;
 }
 
-ordered_json PlateJson(const StellarPlateResult& s, const std::optional<IdentificationResult>& id) {
+ordered_json PlateJson(DistortionModelId lens, const StellarPlateResult& s, const std::optional<IdentificationResult>& id) {
   ordered_json j;
   j["id"] = s.plate_id;
   j["group"] = s.group;
@@ -38,7 +41,7 @@ ordered_json PlateJson(const StellarPlateResult& s, const std::optional<Identifi
   j["unknown_stars"] = s.unknown_stars;
   j["images"] = s.images;
   j["rejected_images"] = s.rejected_images;
-  j["camera"] = CameraJson(s.camera, s.camera_sigma);
+  j["camera"] = CameraJson(lens, s.camera, s.camera_sigma);
   j["deformation"] = {{"cx_mm", s.cx_mm}, {"cx_sigma_mm", s.cx_sigma_mm}, {"cy_mm", s.cy_mm},
                       {"cy_sigma_mm", s.cy_sigma_mm}, {"epsilon_rad", s.epsilon_rad},
                       {"epsilon_sigma_rad", s.epsilon_sigma_rad}};
@@ -62,20 +65,21 @@ ordered_json PlateJson(const StellarPlateResult& s, const std::optional<Identifi
   return j;
 }
 
-ordered_json CombinationJson(const StellarCombination& c) {
+ordered_json CombinationJson(DistortionModelId lens, const StellarCombination& c) {
   ordered_json j;
   j["name"] = c.name;
   j["plates"] = c.plate_ids;
-  j["camera"] = CameraJson(c.camera, c.camera_sigma);
+  j["camera"] = CameraJson(lens, c.camera, c.camera_sigma);
   j["m_0"] = c.m_0;
   j["degrees_of_freedom"] = c.dof;
   j["m_p_um"] = c.m_p_um;
   j["m_p_after_um"] = c.m_p_after_um;
   j["relinearizations"] = c.relinearizations;
   j["pope_one_step_offset_sigma"] = c.one_step_offset_sigma;
-  std::vector<std::vector<double>> correlation(kStellarCameraParams, std::vector<double>(kStellarCameraParams, 0.0));
-  for (int a = 0; a < kStellarCameraParams; ++a) {
-    for (int b = 0; b < kStellarCameraParams; ++b) {
+  const int n = static_cast<int>(c.camera.size());
+  std::vector<std::vector<double>> correlation(n, std::vector<double>(n, 0.0));
+  for (int a = 0; a < n; ++a) {
+    for (int b = 0; b < n; ++b) {
       const double d = std::sqrt(c.cofactor(a, a) * c.cofactor(b, b));
       correlation[a][b] = d > 0 ? c.cofactor(a, b) / d : 0.0;
     }
@@ -89,14 +93,14 @@ ordered_json CombinationJson(const StellarCombination& c) {
   return j;
 }
 
-ordered_json InterlockJson(const StellarInterlockResult& r) {
+ordered_json InterlockJson(DistortionModelId lens, const StellarInterlockResult& r) {
   ordered_json j;
   j["exposures"] = r.exposures;
   j["cameras"] = ordered_json::array();
   for (const InterlockCameraResult& c : r.cameras) {
     j["cameras"].push_back({{"name", c.name}, {"plates", c.plates}, {"stars", c.stars}, {"images", c.images},
                             {"rejected_images", c.rejected_images}, {"rms_residual_um", c.rms_residual_um},
-                            {"camera", CameraJson(c.camera, c.camera_sigma)}});
+                            {"camera", CameraJson(lens, c.camera, c.camera_sigma)}});
   }
   j["interlocks"] = ordered_json::array();
   for (const CameraInterlockResult& i : r.interlocks) {
@@ -125,44 +129,35 @@ ordered_json InterlockJson(const StellarInterlockResult& r) {
 
 }  // namespace
 
-PrintedCamera ToPrinted(const StellarCamera& values, const StellarCamera& sigmas) {
-  const StellarCamera p = StellarCameraToPrinted(values);
-  PrintedCamera out;
-  for (int i = 0; i < kStellarCameraParams; ++i) out.value[i] = p[i], out.sigma[i] = sigmas[i];
-  for (int i = 0; i < 3; ++i) out.value[i] *= 1e3, out.sigma[i] *= 1e3;
-  out.value[3] = 1e3 * (p[3] + p[1]);  // from the reseau centre (xp's sigma is ~1e-3 of xs')
-  out.value[4] = 1e3 * (p[4] + p[2]);
-  out.sigma[3] *= 1e3;
-  out.sigma[4] *= 1e3;
-  out.value[10] *= kRadToDeg;
-  out.sigma[10] *= kRadToDeg;
-  return out;
-}
-
 std::string FormatStellarJson(const StellarJob& job, const StellarJobResult& result) {
   ordered_json j;
   j["title"] = job.title;
   j["adjustment"] = "stellar calibration (seed 001), docs/stellar.md";
   j["cameras"] = ordered_json::array();
   for (const CameraDefinition& c : job.cameras) j["cameras"].push_back(c.name);
-  j["frames"] = "plate_frame: x right, y up, xs/ys from the principal point, Phi_T rad; seed001_printed_frame: "
-                "left-handed (y down), um, xs/ys from the reseau centre, Phi_T deg";
+  const DistortionModelId lens = job.options.lens_model;
+  j["lens_model"] = DistortionModelName(lens);
+  j["frames"] = lens == DistortionModelId::kSlama
+                    ? "plate_frame: x right, y up, xs/ys from the principal point, Phi_T rad; seed001_printed_frame: "
+                      "left-handed (y down), um, xs/ys from the reseau centre, Phi_T deg"
+                    : "plate_frame: x right, y up, the lens model's parameters (distortion_models.h) about the "
+                      "principal point";
   j["catalog"] = {{"path", job.catalog_path}, {"magnitude_limit", job.magnitude_limit},
                   {"sigma_arcsec", job.catalog_sigma_arcsec}, {"stars", result.catalog.size()}};
   j["plates"] = ordered_json::array();
   for (size_t i = 0; i < result.singles.size(); ++i) {
-    ordered_json plate = PlateJson(result.singles[i], result.identification[i]);
+    ordered_json plate = PlateJson(lens, result.singles[i], result.identification[i]);
     plate["camera_name"] = job.cameras[job.plates[i].camera].name;
     plate["exposure"] = job.plates[i].exposure;
     j["plates"].push_back(std::move(plate));
   }
   j["combinations"] = ordered_json::array();
   for (size_t k = 0; k < result.combinations.size(); ++k) {
-    ordered_json c = CombinationJson(result.combinations[k]);
+    ordered_json c = CombinationJson(lens, result.combinations[k]);
     c["camera_name"] = job.cameras[result.combination_camera[k]].name;
     j["combinations"].push_back(std::move(c));
   }
-  if (result.interlock) j["interlock"] = InterlockJson(*result.interlock);
+  if (result.interlock) j["interlock"] = InterlockJson(lens, *result.interlock);
   return j.dump(2) + "\n";
 }
 
@@ -195,44 +190,6 @@ std::string FormatIdentificationCsv(const StellarJobResult& result) {
     }
   }
   return out;
-}
-
-CameraDefinition StellarCameraDefinition(const StellarJob& job, const StellarJobResult& result, int camera) {
-  int combination = -1, single = -1;
-  for (size_t k = 0; k < result.combinations.size(); ++k) {
-    if (result.combination_camera[k] == camera) combination = static_cast<int>(k);
-  }
-  for (size_t i = 0; i < result.singles.size() && single < 0; ++i) {
-    if (job.plates[i].camera == camera) single = static_cast<int>(i);
-  }
-  if (combination < 0 && single < 0) throw Error("stellar calibration", "internal: a camera without plates");
-  const bool combined = combination >= 0;
-  const StellarCamera& values = combined ? result.combinations[combination].camera : result.singles[single].camera;
-  const StellarCamera& sigmas =
-      combined ? result.combinations[combination].camera_sigma : result.singles[single].camera_sigma;
-  const CameraDefinition& source = job.cameras[camera];
-  const PrintedCamera p = ToPrinted(values, sigmas);
-  CameraDefinition d = source;
-  d.description = "calibrated by platemeter's stellar calibration (seed 001) from " + source.name;
-  d.source = job.title + (combined ? "; " + result.combinations[combination].name : "; plate " + result.singles[single].plate_id);
-  d.nominal_principal_distance_mm = values[0];
-  LensCalibration lens;
-  lens.model = "orbigon-11";
-  lens.source = d.source + " (seed 001's printed, left-handed frame, as the builtin orbigon)";
-  lens.principal_distance_mm = p.value[0] * 1e-3;
-  lens.principal_point_x_mm = p.value[1] * 1e-3;
-  lens.principal_point_y_mm = p.value[2] * 1e-3;
-  const char* keys[] = {"xs_um", "ys_um", "K1_per_m2", "K2_per_m4", "K3_per_m6", "K4_per_m", "K5_per_m3", "Phi_T_deg"};
-  for (int i = 3; i < kStellarCameraParams; ++i) {
-    lens.coefficients[keys[i - 3]] = p.value[i];
-    if (sigmas[i] > 0) lens.sigmas[keys[i - 3]] = p.sigma[i];
-  }
-  const char* struct_keys[] = {"principal_distance_mm", "principal_point_x_mm", "principal_point_y_mm"};
-  for (int i = 0; i < 3; ++i) {
-    if (sigmas[i] > 0) lens.sigmas[struct_keys[i]] = sigmas[i];
-  }
-  d.lens = lens;
-  return d;
 }
 
 std::vector<std::string> WriteStellarOutputs(const std::string& dir, const StellarJob& job,

@@ -11,13 +11,28 @@ namespace {
 constexpr double kRadToArcsec = 180.0 * 3600.0 / M_PI;
 
 // Seed 001 prints K as mantissa and power of ten ("+3.1602-1"); we print 5 significant digits.
-std::string Value(int i, double v) { return i >= 5 && i <= 9 ? fmt::format("{:+.4e}", v) : fmt::format("{:.2f}", v); }
-std::string Sigma(int i, double s) { return i >= 5 && i <= 9 ? fmt::format("{:.2e}", s) : fmt::format("{:.2f}", s); }
+std::string Value(const ReportedCamera& c, int i) {
+  return c.exponent[i] ? fmt::format("{:+.4e}", c.value[i]) : fmt::format("{:.{}f}", c.value[i], c.decimals);
+}
+std::string Sigma(const ReportedCamera& c, int i) {
+  return c.exponent[i] ? fmt::format("{:.2e}", c.sigma[i]) : fmt::format("{:.{}f}", c.sigma[i], c.decimals);
+}
 
-void Table2(const StellarJobResult& result, std::string* md) {
+// What the camera rows are in (ReportCamera).
+std::string FrameNote(DistortionModelId lens) {
+  if (lens == DistortionModelId::kSlama)
+    return "Seed 001's printed frame: origin at the reseau centre, left-handed as viewed on the focal plane (y down); "
+           "xs, ys from the reseau centre; K1..K5 with d in metres";
+  return std::string("Lens model ") + DistortionModelName(lens) +
+         ", plate frame: origin at the reseau centre, x right, y up; c, xp, yp in mm, the lens's parameters in the "
+         "units of their names, about the principal point";
+}
+
+void Table2(DistortionModelId lens, const StellarJobResult& result, std::string* md) {
+  // epsilon changes sign with y in seed 001's printed frame.
+  const double epsilon_sign = lens == DistortionModelId::kSlama ? -1.0 : 1.0;
   *md += "## Single-plate calibrations (seed 001 Table 2)\n\n";
-  *md += "Seed 001's printed frame: origin at the reseau centre, left-handed as viewed on the focal plane (y down); "
-         "xs, ys from the reseau centre; K1..K5 with d in metres; values +- standard errors.\n\n";
+  *md += FrameNote(lens) + "; values +- standard errors.\n\n";
   *md += "| |";
   for (const auto& s : result.singles) *md += " " + s.plate_id + " |";
   *md += "\n|---|";
@@ -33,15 +48,18 @@ void Table2(const StellarJobResult& result, std::string* md) {
   row("unknown stars", [](const StellarPlateResult& s) { return std::to_string(s.unknown_stars); });
   row("star images", [](const StellarPlateResult& s) { return std::to_string(s.images); });
   row("rejected images", [](const StellarPlateResult& s) { return std::to_string(s.rejected_images); });
-  row("epsilon (sec arc)", [](const StellarPlateResult& s) {
-    return fmt::format("{:+.2f} +- {:.2f}", -s.epsilon_rad * kRadToArcsec, s.epsilon_sigma_rad * kRadToArcsec);
+  row("epsilon (sec arc)", [&](const StellarPlateResult& s) {
+    return fmt::format("{:+.2f} +- {:.2f}", epsilon_sign * s.epsilon_rad * kRadToArcsec,
+                       s.epsilon_sigma_rad * kRadToArcsec);
   });
   row("Cx (um)", [](const StellarPlateResult& s) { return fmt::format("{:.2f} +- {:.2f}", 1e3 * s.cx_mm, 1e3 * s.cx_sigma_mm); });
   row("Cy (um)", [](const StellarPlateResult& s) { return fmt::format("{:.2f} +- {:.2f}", 1e3 * s.cy_mm, 1e3 * s.cy_sigma_mm); });
-  for (int i = 1; i < kStellarCameraParams; ++i) {
-    row(kPrintedCameraNames[i], [i](const StellarPlateResult& s) {
-      const PrintedCamera p = ToPrinted(s.camera, s.camera_sigma);
-      return Value(i, p.value[i]) + " +- " + Sigma(i, p.sigma[i]);
+  const StellarCamera nominal = NominalStellarCamera(1.0, lens);
+  const std::vector<std::string> names = ReportCamera(lens, nominal, nominal).names;
+  for (int i = 1; i < static_cast<int>(names.size()); ++i) {
+    row(names[i], [&, i](const StellarPlateResult& s) {
+      const ReportedCamera c = ReportCamera(lens, s.camera, s.camera_sigma);
+      return Value(c, i) + " +- " + Sigma(c, i);
     });
   }
   row("m_p (um)", [](const StellarPlateResult& s) { return fmt::format("{:.2f}", s.m_p_um); });
@@ -53,29 +71,29 @@ void Table2(const StellarJobResult& result, std::string* md) {
 }
 
 // A table with a value and an s.e. column per camera (anything with name,
-// camera and camera_sigma), one row per parameter in the printed frame.
+// camera and camera_sigma), one row per parameter as ReportCamera gives them.
 template <typename Columns>
-void CameraColumns(const Columns& columns, std::string* md) {
+void CameraColumns(DistortionModelId lens, const Columns& columns, std::string* md) {
+  std::vector<ReportedCamera> cameras;
+  for (const auto& c : columns) cameras.push_back(ReportCamera(lens, c.camera, c.camera_sigma));
   *md += "| |";
   for (const auto& c : columns) *md += " " + c.name + " | s.e. |";
   *md += "\n|---|";
   for (size_t k = 0; k < columns.size(); ++k) *md += "---|---|";
   *md += "\n";
-  for (int i = 0; i < kStellarCameraParams; ++i) {
-    *md += std::string("| ") + kPrintedCameraNames[i] + " |";
-    for (const auto& c : columns) {
-      const PrintedCamera p = ToPrinted(c.camera, c.camera_sigma);
-      *md += " " + Value(i, p.value[i]) + " | " + Sigma(i, p.sigma[i]) + " |";
-    }
+  for (int i = 0; i < static_cast<int>(cameras.front().names.size()); ++i) {
+    *md += "| " + cameras.front().names[i] + " |";
+    for (const ReportedCamera& c : cameras) *md += " " + Value(c, i) + " | " + Sigma(c, i) + " |";
     *md += "\n";
   }
 }
 
-void Table3(const StellarJobResult& result, std::string* md) {
+void Table3(DistortionModelId lens, const StellarJobResult& result, std::string* md) {
   if (result.combinations.empty()) return;
   *md += "## Multiple-plate calibrations (seed 001 Table 3)\n\n";
-  *md += "Pope's generalized weighted mean, relinearized until it is the simultaneous solution (docs/stellar.md).\n\n";
-  CameraColumns(result.combinations, md);
+  *md += "Pope's generalized weighted mean, relinearized until it is the simultaneous solution (docs/stellar.md). " +
+         FrameNote(lens) + ".\n\n";
+  CameraColumns(lens, result.combinations, md);
   auto row = [&](const std::string& name, auto cell) {
     *md += "| " + name + " |";
     for (const auto& c : result.combinations) *md += " " + cell(c) + " | |";
@@ -102,13 +120,13 @@ void Table3(const StellarJobResult& result, std::string* md) {
 
 // Seed 004 Tables A.4-A.6: each camera of the joint adjustment and the
 // relative orientation of every other camera to camera 0.
-void TableInterlock(const StellarInterlockResult& r, std::string* md) {
+void TableInterlock(DistortionModelId lens, const StellarInterlockResult& r, std::string* md) {
   *md += "## Cameras exposed together (seed 004 SMAC, Tables A.4-A.6)\n\n";
   *md += fmt::format("Joint adjustment of {} exposures: sigma0 = {:.3f} with {:.0f} degrees of freedom (chi-square "
                      "test of the a-priori sigmas: p = {:.3f}{}).\n\n",
                      r.exposures, r.adjustment.sigma0, r.adjustment.dof, r.adjustment.chi_square.p_value,
                      r.adjustment.chi_square.rejected ? ", REJECTED" : ", accepted");
-  CameraColumns(r.cameras, md);
+  CameraColumns(lens, r.cameras, md);
   auto row = [&](const std::string& name, auto cell) {
     *md += "| " + name + " |";
     for (const auto& c : r.cameras) *md += " " + cell(c) + " | |";
@@ -158,9 +176,9 @@ std::string FormatStellarMarkdown(const StellarJob& job, const StellarJobResult&
                       r.false_alarm_probability, r.rms_arcsec);
   }
   md += "\n";
-  Table2(result, &md);
-  Table3(result, &md);
-  if (result.interlock) TableInterlock(*result.interlock, &md);
+  Table2(job.options.lens_model, result, &md);
+  Table3(job.options.lens_model, result, &md);
+  if (result.interlock) TableInterlock(job.options.lens_model, *result.interlock, &md);
   return md;
 }
 

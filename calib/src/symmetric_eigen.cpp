@@ -1,8 +1,7 @@
 // Symmetric eigenproblems and inverses through LAPACK (symmetric_eigen.h).
 // The Fortran routines are declared here, as Ceres' own lapack.cc declares
-// them. The library comes with Ceres: its CMake target Ceres::ceres, which
-// calib links, carries liblapack.so (Debian's libceres-dev depends on
-// libatlas-base-dev, which provides it), so no package is added for it.
+// them. calib links LAPACK::LAPACK (CMake's FindLAPACK); the library is
+// already on a machine with Debian's libceres-dev, which depends on it.
 #include "symmetric_eigen.h"
 
 #include <algorithm>

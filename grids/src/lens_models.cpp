@@ -20,6 +20,14 @@ const std::vector<LensModelInfo>& KnownLensModels() {
         {"k2_per_mm4", "balanced radial, 1/mm^4 (0 for the one-term Gaussian of Tables 1 and 3)"},
         {"p1_per_mm", "decentering p1, 1/mm"},
         {"p2_per_mm", "decentering p2, 1/mm"}}},
+      {"brown-conrady",
+       "seed 000 eq. (1): Gaussian radial k1 r^3 + k2 r^5 + k3 r^7 and decentering p1, p2 "
+       "(corrections added to the measured coordinates, r in mm from the principal point)",
+       {{"k1_per_mm2", "radial: dx = x (k1 r^2 + k2 r^4 + k3 r^6), 1/mm^2"},
+        {"k2_per_mm4", "radial, 1/mm^4"},
+        {"k3_per_mm6", "radial, 1/mm^6"},
+        {"p1_per_mm", "decentering p1, 1/mm"},
+        {"p2_per_mm", "decentering p2, 1/mm"}}},
       {"brown-affine",
        "seed 000 eq. (1): Gaussian radial k1 r^3 + k2 r^5 + k3 r^7 and decentering p1, p2 "
        "(corrections added to the measured coordinates, r in mm from the principal point), "

@@ -68,7 +68,7 @@ TEST(StellarCombination, WeightedMeanEqualsTheSimultaneousSolution) {
   std::vector<int> index;
   for (const char* name : kStellarCameraParamNames) index.push_back(simultaneous.Find("camera", name));
   Eigen::MatrixXd q = simultaneous.Covariance(index, false);
-  StellarCamera reference{};
+  StellarCamera reference(kStellarCameraParams);
   for (int i = 0; i < kStellarCameraParams; ++i) reference[i] = simultaneous.parameters[index[i]].value;
   CanonicalDecentering(&reference, &q);
   std::printf("relinearizations %d, Pope's one step off by %.2e sigma; m_0 %.6f (simultaneous %.6f), dof %.0f (%.0f)\n",

@@ -157,6 +157,58 @@ TEST(CliStellar, InterlocksTwoCamerasExposedTogether) {
   EXPECT_NE(testing::ReadTextFile(out + "/report.md").find("Relative orientation matrix"), std::string::npos);
 }
 
+// Seed 004's lens model through the job file: two simulated plates of the
+// sn004-terrain camera (its smac-radial-decentering lens, Table A.4, is the
+// truth and the starting camera), stars identified from detector keys; the
+// combined camera within 3 sigma of the truth, and the camera TOML written
+// with the smac lens loads as a definition.
+TEST(CliStellar, SmacLensModelWritesALoadableCamera) {
+  testing::TempDir dir;
+  const DefinitionRegistry registry;
+  StellarCamera truth;
+  std::string plates;
+  for (const auto& [id, start, roll, seed] : {std::tuple{"N", "1972-05-12T05:30:00Z", 0.0, 61},
+                                              std::tuple{"S", "1972-04-09T06:10:00Z", 180.0, 62}}) {
+    sim::StellarPlateSimulation s = testing::BeltsvillePlate(id, start, roll);
+    s.field.place.pressure_hpa = 1013.25 * std::exp(-50.0 / (29.3 * (273.15 + 10.0)));  // the job's default
+    s.magnitude_limit = 5.5;
+    const sim::StellarTruthPlate t = sim::SimulateStellarTruth(s, registry.Camera("sn004-terrain"));
+    truth = t.camera;
+    const std::string path = dir.file(std::string(id) + ".csv");
+    sim::WriteStellarMeasurementFile(sim::Noisy(t, {.seed = static_cast<uint64_t>(seed)}).plate, path, true);
+    plates += "[[plate]]\nid = \"" + std::string(id) + "\"\nmeasurements = \"" + path +
+              "\"\naxis_azimuth_deg = 120\naxis_altitude_deg = 87\n";
+  }
+  const std::string job = dir.file("job.toml");
+  WriteText(job, "camera = \"sn004-terrain\"\nlens_model = \"smac-radial-decentering\"\nmagnitude_limit = 5.5\n" +
+                     std::string(kSite) + plates);
+  const std::string out = dir.file("out");
+  const auto run = RunPlatemeter("calibrate stellar '" + job + "' -o '" + out + "'");
+  ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+  std::printf("%s", run.out.c_str());
+  const nlohmann::json j = nlohmann::json::parse(testing::ReadTextFile(out + "/calibration.json"));
+  EXPECT_EQ(j["lens_model"], "smac-radial-decentering");
+  ASSERT_EQ(j["combinations"].size(), 1u);
+  const auto& camera = j["combinations"][0]["camera"];
+  EXPECT_FALSE(camera.contains("seed001_printed_frame"));
+  const std::vector<std::string> names = StellarCameraParamNames(DistortionModelId::kSmacRadialDecentering);
+  for (size_t i = 0; i < names.size(); ++i) {
+    const auto& p = camera["plate_frame"][names[i]];
+    double difference = p["value"].get<double>() - truth[i];
+    if (names[i] == "theta0_rad") difference = std::remainder(difference, 2 * M_PI);
+    std::printf("%-11s z %6.2f\n", names[i].c_str(), difference / p["sigma"].get<double>());
+    EXPECT_LT(std::abs(difference), 3.0 * p["sigma"].get<double>()) << names[i];
+  }
+  EXPECT_NEAR(j["combinations"][0]["m_0"].get<double>(), 1.0, 0.1);
+  const std::string toml = testing::ReadTextFile(out + "/camera-sn004-terrain-stellar.toml");
+  EXPECT_NE(toml.find("model = \"smac-radial-decentering\""), std::string::npos) << toml;
+  EXPECT_NE(toml.find("theta0_rad = "), std::string::npos) << toml;
+  const auto show =
+      RunPlatemeter("--definitions '" + out + "/camera-sn004-terrain-stellar.toml' cameras show sn004-terrain");
+  EXPECT_EQ(show.exit_code, 0) << show.err;
+  EXPECT_NE(show.out.find("smac-radial-decentering"), std::string::npos) << show.out;
+}
+
 TEST(CliStellar, BadJobsAreOneLineErrors) {
   testing::TempDir dir;
   const std::string out = dir.file("out");
@@ -168,6 +220,9 @@ TEST(CliStellar, BadJobsAreOneLineErrors) {
       {"camera = \"orbigon\"\n", "[site]"},
       {"camera = \"orbigon\"\norientation_sets = 4\n" + std::string(kSite), "orientation_sets"},
       {"camera = \"orbigon\"\n" + std::string(kSite) + "[[plate]]\nid = \"A\"\n", "needs 'id' and 'measurements'"},
+      {"camera = \"orbigon\"\nlens_model = \"brown-balanced\"\n" + std::string(kSite), "lens_model: 'brown-balanced'"},
+      {"camera = \"orbigon\"\nlens_model = \"smac-radial-decentering\"\nfixed = [\"xs_mm\"]\n" + std::string(kSite),
+       "unknown smac-radial-decentering camera parameter 'xs_mm'"},
       {"camera = \"orbigon\"\n" + std::string(kSite) + "[[plate]]\nid = \"A\"\nmeasurements = \"" + measurements +
            "\"\ncamera = \"nosuch\"\n", "unknown camera 'nosuch'"},
   };

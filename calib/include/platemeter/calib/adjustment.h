@@ -44,20 +44,21 @@ struct AdjustmentOptions {
   // sigma for 4000 components at 1 %).
   double rejection_threshold = 0.0;   // sigma units
   double false_rejection_rate = 0.01; // -; chance that any good observation is rejected (threshold 0)
-  int max_iterations = 100;           // trust-region (Powell dogleg) iterations per pass
-  // Relative change of v'Pv that ends a pass: at v'Pv = 4e5 (a block of
-  // 400 000 observations) a step changing it by 1e-10 of itself moves the
-  // solution by under 0.01 sigma in any direction.
+  int max_iterations = 100;           // per pass: Gauss-Newton steps, or trust-region iterations where Ceres takes over
+  // Relative change of v'Pv that ends a pass (the weighted pass: the decrease
+  // its quadratic model still promises): at v'Pv = 4e5 (a block of 400 000
+  // observations) 1e-10 of it is a step under 0.01 sigma in any direction.
   double function_tolerance = 1e-10;
-  // Step that ends a pass, relative to the norm of all parameters (Ceres'
+  // Step that ends a trust-region pass, relative to the norm of all parameters (Ceres'
   // parameter_tolerance): with a principal distance of 80 mm among them, 1e-12
   // stops at steps of 8e-11 mm. Lower both tolerances (1e-16) to drive a
   // solution to its last digits, as a reference solution must.
   double parameter_tolerance = 1e-12;
-  // Reference solutions: keep taking Gauss-Newton steps after v'Pv stops
-  // telling better from worse (it changes below its round-off within ~1e-6
-  // sigma of the minimum), until max_iterations; with both tolerances at
-  // 1e-16 the solution reaches its stationary point to ~1e-12 sigma.
+  // Reference solutions: once v'Pv stops telling better from worse (a step
+  // promising under 1e-6 of it), take 8 more full Gauss-Newton steps instead
+  // of stopping at function_tolerance (the trust region, where it runs, keeps
+  // taking non-monotonic steps until max_iterations); the solution reaches its
+  // stationary point to ~1e-11 sigma.
   bool polish = false;
   double correlation_threshold = 0.9; // |rho| named in the report
   double significance_level = 0.05;   // alpha of the chi-square and t/F tests

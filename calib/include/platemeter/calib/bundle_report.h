@@ -15,13 +15,18 @@
 //   camera-NAME-opencv.yaml, -micmac.xml, .tsai: the exports, where a pixel
 //                      grid is given (fitted where the models differ, the
 //                      fit's residual in the file and in calibration.json).
+// report.html and plots/ are formatted by the report library (a higher layer:
+// report/bundle_html_report.h) and handed to WriteBundleOutputs as extra files.
 #include <array>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "platemeter/calib/bundle_adjustment.h"
 #include "platemeter/calib/bundle_input_io.h"
+#include "platemeter/calib/distortion_profile.h"
+#include "platemeter/core/text_document.h"
 #include "platemeter/grids/definitions.h"
 
 namespace platemeter {
@@ -45,14 +50,35 @@ struct BundleReportOptions {
 // The calibrated camera of result.cameras[index] as a camera definition.
 CameraDefinition CalibratedCameraDefinition(const BundleResult& result, int index, const std::string& source);
 
+// The report's content (report.md; report.html renders the same document).
+TextDocument BundleReportDocument(const BundleResult& result, const BundleReportOptions& options);
+
+// The camera's adjusted parameters (those with a sigma): their indices in
+// result.adjustment.parameters, and their names in `names` (the inner cone's
+// correlation matrix is over these).
+std::vector<int> AdjustedCameraParameters(const BundleCameraResult& camera, std::vector<std::string>* names);
+
+// The distortion profile of result.cameras[camera_index] balanced as the report
+// balances it (options.balance_radius_mm, else equal lobe areas over the
+// format's half diagonal) at `radii_mm` (empty: the report's table radii).
+// Throws Error("distortion profile", why) where none can be computed.
+DistortionProfile BundleDistortionProfile(const BundleResult& result, int camera_index,
+                                          const BundleReportOptions& options, std::vector<double> radii_mm = {});
+// "balanced to zero at r = 30 mm" or "balanced to equal ... lobe areas over 0..38.9 mm".
+std::string BundleBalanceWords(const BundleResult& result, int camera_index, const BundleReportOptions& options);
+
 std::string FormatCalibrationJson(const BundleResult& result, const BundleReportOptions& options);
 std::string FormatBundleReportMarkdown(const BundleResult& result, const BundleReportOptions& options);
 // frame,point_id,status,x_residual_um,y_residual_um,x_normalized,y_normalized,origin,reason
 std::string FormatBundleResidualsCsv(const BundleResult& result);
 
 // Writes every output into `dir` (created if needed), each file atomically;
-// returns the paths written. Throws Error naming the file on failure.
+// returns the paths written. `extra_files` (name relative to `dir`, e.g.
+// "plots/network-plan.png", and contents) are files formatted by a higher
+// layer (the HTML report and its plots: report/bundle_html_report.h), written
+// with the set after everything was formatted. Throws Error naming the file on failure.
 std::vector<std::string> WriteBundleOutputs(const std::string& dir, const BundleResult& result,
-                                            const BundleReportOptions& options);
+                                            const BundleReportOptions& options,
+                                            const std::vector<std::pair<std::string, std::string>>& extra_files = {});
 
 }  // namespace platemeter

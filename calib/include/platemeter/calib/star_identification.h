@@ -45,6 +45,8 @@ struct IdentificationOptions {
   double false_alarm = 1e-9;            // accepted hypothesis: chance of as many matches, all hypotheses counted
   int neighbours = 4;                   // triangles of each star with pairs of its nearest neighbours
   int max_hypotheses = 5000;            // give up after verifying this many
+  // The camera's lens model (stellar_lens.h): how its distortion is undone.
+  DistortionModelId lens_model = DistortionModelId::kSlama;
   bool Check(std::string* why) const;
 };
 
@@ -62,7 +64,7 @@ struct IdentificationResult {
 
 // `catalog`: the stars to identify against (keys as the calibration will use
 // them); `axis_enu`: the approximate optical axis in the site's local frame;
-// `camera`: the nominal camera (distortion ignored). Throws platemeter::Error
+// `camera`: the nominal camera (options.lens_model; its distortion undone). Throws platemeter::Error
 // when no hypothesis passes verification ("no identification: ...").
 IdentificationResult IdentifyStars(const std::vector<DetectedStarImage>& images, const StellarCatalog& catalog,
                                    const calib::ApparentPlaceOptions& place, const Eigen::Vector3d& axis_enu,

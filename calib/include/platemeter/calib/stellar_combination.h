@@ -2,7 +2,8 @@
 // Several stellar plates combined into one camera (seed 001, "Multiple-plate
 // calibration results", Table 3): Pope's generalized weighted mean
 //   X = (sum N_i)^-1 sum N_i X_i,   N_i = Sigma_Xi^-1 (the plate's reduced
-//   normal matrix of the 11 camera parameters),
+//   normal matrix of the camera parameters: seed 001's 11, or the n of the
+//   options' lens model, stellar_lens.h),
 //   m_0^2 = (sum v_i'P v_i + sum (X_i - X)' N_i (X_i - X)) / nu,
 //   Sigma_X = m_0^2 (sum N_i)^-1,
 // in which each plate's orientation sets, deformation and stars take new values
@@ -47,9 +48,9 @@ struct PlateConsistency {
 struct StellarCombination {
   std::string name;                   // e.g. "f/3.5", "combined"
   std::vector<std::string> plate_ids;
-  StellarCamera camera{};             // plate frame
-  StellarCamera camera_sigma{};       // scaled by m_0
-  Eigen::MatrixXd cofactor;           // 11 x 11, (sum N_i)^-1 (zero rows for fixed parameters)
+  StellarCamera camera;               // plate frame, the options' lens model
+  StellarCamera camera_sigma;         // scaled by m_0
+  Eigen::MatrixXd cofactor;           // n x n, (sum N_i)^-1 (zero rows for fixed parameters)
   double m_0 = 0.0;                   // standard error of unit weight of the combination
   double dof = 0.0;                   // nu
   double vtpv = 0.0;                  // sum of the plates' v'Pv at the combined camera

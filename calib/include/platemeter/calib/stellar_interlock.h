@@ -1,7 +1,8 @@
 #pragma once
 // Several cameras exposed together on the stars, adjusted jointly (seed 004's
 // SMAC, "Simultaneous Multi-frame Analytical Calibration ... arrays of up to
-// five cameras"): each camera keeps its own 11 parameters (stellar_plate.h),
+// five cameras"): each camera keeps its own parameters (stellar_plate.h; the
+// options' lens model, the same for every camera),
 // each plate its own deformation and star corrections, and the cameras of one
 // exposure share ONE exterior orientation: camera k's orientation is camera
 // 0's times a fixed relative orientation (the interlock)
@@ -34,8 +35,8 @@ struct InterlockExposure {
 
 struct InterlockCameraResult {
   std::string name;
-  StellarCamera camera{};             // plate frame
-  StellarCamera camera_sigma{};       // scaled; 0 where fixed
+  StellarCamera camera;               // plate frame, the options' lens model
+  StellarCamera camera_sigma;         // scaled; 0 where fixed
   int plates = 0, stars = 0, images = 0, rejected_images = 0;
   double rms_residual_um = 0.0;       // unweighted, per coordinate, of the used images (seed 004's "mean error")
 };

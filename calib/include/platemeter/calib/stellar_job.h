@@ -33,7 +33,8 @@ struct StellarJob {
   std::string path;                   // the job file (messages)
   std::string title;
   // The cameras: [0] the job's `camera`, then those the plates name. Each
-  // starts from its orbigon-11 lens or its nominal principal distance.
+  // starts from its lens if that is of options.lens_model, else from its
+  // nominal principal distance with no distortion.
   std::vector<CameraDefinition> cameras;
   std::string catalog_path;           // kstars stars.dat (default) or a KStars binary file
   double magnitude_limit = 6.5;       // catalog stars to this V

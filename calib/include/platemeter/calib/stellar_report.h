@@ -1,8 +1,10 @@
 #pragma once
 // The outputs of a stellar calibration job (docs/stellar-job.md, "Outputs"):
 //   calibration.json   every plate (seed 001 Table 2) and combination (Table 3),
-//                      plate frame and seed 001's printed frame, statistics, rank
-//   report.md          Tables 2 and 3 in seed 001's form (printed frame, um)
+//                      plate frame (and for orbigon-11 seed 001's printed
+//                      frame), statistics, rank
+//   report.md          Tables 2 and 3 in seed 001's form (orbigon-11: printed
+//                      frame, um; other lens models: plate frame, own names)
 //   residuals.csv      one row per image: plate, image, star, status, vx, vy (um), reason
 //   identification.csv one row per detected star: plate, star key, catalog key, status
 //   camera-NAME-stellar.toml  per camera: the calibrated camera (its last
@@ -28,13 +30,26 @@ inline constexpr std::array<const char*, kStellarCameraParams> kPrintedCameraNam
     "C_um", "xp_um", "yp_um", "xs_um", "ys_um", "K1", "K2", "K3", "K4", "K5", "Phi_T_deg"};
 PrintedCamera ToPrinted(const StellarCamera& values, const StellarCamera& sigmas);
 
+// A camera as the reports print it: orbigon-11 in seed 001's printed frame
+// and units (ToPrinted); another lens model in the plate frame with its own
+// parameter names and units (seed 001's printed frame is seed 001's only).
+struct ReportedCamera {
+  std::string frame;                  // "seed 001's printed frame" or "plate frame"
+  std::vector<std::string> names;
+  std::vector<double> value, sigma;
+  std::vector<bool> exponent;         // lens coefficients: mantissa and power of ten
+  int decimals = 2;                   // the other rows' decimals
+};
+ReportedCamera ReportCamera(DistortionModelId lens, const StellarCamera& values, const StellarCamera& sigmas);
+
 std::string FormatStellarJson(const StellarJob& job, const StellarJobResult& result);
 std::string FormatStellarMarkdown(const StellarJob& job, const StellarJobResult& result);
 std::string FormatStellarResidualsCsv(const StellarJobResult& result);
 std::string FormatIdentificationCsv(const StellarJobResult& result);
 // Camera `camera` (index in job.cameras) calibrated: its definition with a new
-// orbigon-11 lens (printed frame) and sigmas, from its last combination or
-// its first plate.
+// lens of the job's lens model (orbigon-11 in seed 001's printed frame, the
+// others in the plate frame with the definition keys of docs/definitions.md)
+// and sigmas, from its last combination or its first plate.
 CameraDefinition StellarCameraDefinition(const StellarJob& job, const StellarJobResult& result, int camera);
 
 // Writes the outputs into `dir` (created); returns the paths written.

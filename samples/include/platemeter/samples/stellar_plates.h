@@ -9,8 +9,10 @@
 // catalog handed to the calibration is that catalog moved by a random
 // N(0, catalog_sigma) arc east and north per star (equivalently: the true sky
 // is off the catalog by its stated error). The true camera is the camera
-// definition's lens (for the Orbigon: seed 001 Table 3's combined solution) in
-// the plate frame (StellarCameraFromModel), Cx = Cy = C, epsilon = 0.
+// definition's lens (for the Orbigon: seed 001 Table 3's combined solution; for
+// sn004-terrain seed 004's smac-radial-decentering lens; any lens model of
+// stellar_lens.h, projected through CameraModel in its own direction) in the
+// plate frame (StellarCameraFromModel), Cx = Cy = C, epsilon = 0.
 #include <cstdint>
 #include <map>
 #include <string>
@@ -39,7 +41,7 @@ struct StellarPlateSimulation {
 struct StellarTruthPlate {
   StellarPlate plate;                // images at their true positions, sigma 0 (see Noisy)
   StellarCatalog catalog;            // the true places (kstars), keyed by the images' star ids
-  StellarCamera camera{};            // true camera, plate frame
+  StellarCamera camera;              // true camera, plate frame, the definition's lens model
   Eigen::Matrix3d camera_from_enu = Eigen::Matrix3d::Identity();
   double duration_s = 0.0;
 };

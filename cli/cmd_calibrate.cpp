@@ -11,6 +11,7 @@
 
 #include "cmd_calibrate_simulate.h"
 #include "cmd_calibrate_stellar.h"
+#include "written_outputs.h"
 #include "commands.h"
 #include "platemeter/calib/bundle_adjustment.h"
 #include "platemeter/calib/bundle_input_io.h"
@@ -52,20 +53,6 @@ void SetFreeParameters(const std::string& list, CameraSetup* camera) {
     }
     if (index < 0) throw Error("--free", "unknown parameter '" + name + "' (known: c, xp, yp, k1, k2, k3, p1, p2, b1, b2)");
     camera->states[index] = ParameterState::Free();
-  }
-}
-
-// Plots of an earlier run that this one did not write (more frames, another
-// camera) would sit unlinked beside the new report.html: removed after the new set is in place.
-void RemoveStalePlots(const std::string& dir, const std::vector<std::string>& written) {
-  std::set<std::string> kept;
-  for (const std::string& path : written) kept.insert(std::filesystem::path(path).filename().string());
-  std::error_code error;
-  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(dir) / "plots", error)) {
-    const std::string extension = entry.path().extension().string();
-    if ((extension == ".png" || extension == ".svg") && !kept.count(entry.path().filename().string())) {
-      std::filesystem::remove(entry.path(), error);
-    }
   }
 }
 
@@ -137,15 +124,7 @@ void RunBundle(const BundleCommandOptions& o, const GlobalOptions& global) {
     }
     std::cout << '\n';
   }
-  int plots = 0;
-  for (const std::string& path : written) {
-    if (path.find("/plots/") != std::string::npos) {
-      ++plots;
-    } else {
-      std::cout << "wrote " << path << '\n';
-    }
-  }
-  if (plots > 0) std::cout << "wrote " << plots << " plot files (PNG and SVG) into " << o.output_dir << "/plots\n";
+  PrintWritten(o.output_dir, written);
 }
 
 }  // namespace

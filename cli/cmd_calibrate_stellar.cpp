@@ -1,6 +1,8 @@
 // platemeter calibrate stellar (cmd_calibrate_stellar.h).
 #include "cmd_calibrate_stellar.h"
 
+#include "written_outputs.h"
+
 #include <iostream>
 #include <memory>
 
@@ -9,6 +11,7 @@
 #include "platemeter/calib/stellar_job.h"
 #include "platemeter/calib/stellar_report.h"
 #include "platemeter/grids/registry.h"
+#include "platemeter/report/stellar_html_report.h"
 
 namespace platemeter::cli {
 namespace {
@@ -29,7 +32,8 @@ void PrintCamera(const std::string& what, DistortionModelId lens, const StellarC
 }
 
 void RunStellar(const StellarCommandOptions& o, const GlobalOptions& global) {
-  const StellarJob job = ReadStellarJob(o.job, DefinitionRegistry::Load(global.definition_files));
+  const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
+  const StellarJob job = ReadStellarJob(o.job, registry);
   AdjustmentProgress progress;
   if (!o.quiet) {
     progress = [last = std::string()](const std::string& stage, double) mutable {
@@ -38,7 +42,11 @@ void RunStellar(const StellarCommandOptions& o, const GlobalOptions& global) {
     };
   }
   const StellarJobResult result = RunStellarJob(job, progress);
-  const std::vector<std::string> written = WriteStellarOutputs(o.output_dir, job, result);
+  std::vector<const MasterGrid*> grids;
+  for (const CameraDefinition& camera : job.cameras) grids.push_back(registry.FindGrid(camera.grid));
+  const auto html = report::FormatStellarHtmlReport(job, result, grids);
+  const std::vector<std::string> written = WriteStellarOutputs(o.output_dir, job, result, html);
+  RemoveStalePlots(o.output_dir, written);
   for (const StellarPlateResult& s : result.singles) {
     std::cout << fmt::format("plate {}: {} images of {} catalog and {} unknown stars, {} rejected; m_o = {:.3f} with "
                              "{:.0f} degrees of freedom, m_p = {:.2f} um\n",
@@ -73,7 +81,7 @@ void RunStellar(const StellarCommandOptions& o, const GlobalOptions& global) {
     for (const CameraInterlockResult& i : r.interlocks)
       std::cout << "interlock " << i.from << " -> " << i.to << ": " << i.angles.summary << '\n';
   }
-  for (const std::string& path : written) std::cout << "wrote " << path << '\n';
+  PrintWritten(o.output_dir, written);
 }
 
 }  // namespace

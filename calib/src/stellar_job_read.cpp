@@ -65,6 +65,8 @@ std::vector<StarImageObservation> ReadPlateImages(const std::string& path, const
     o.sigma_x_mm = *p.sigma_x_mm;
     o.sigma_y_mm = *p.sigma_y_mm;
     o.origin = path + ": point " + p.id;
+    o.trail = p.trail;
+    o.dot = p.dot.value_or(-1);
     out.push_back(std::move(o));
   }
   if (untagged > 0)

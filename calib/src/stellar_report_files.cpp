@@ -193,7 +193,8 @@ std::string FormatIdentificationCsv(const StellarJobResult& result) {
 }
 
 std::vector<std::string> WriteStellarOutputs(const std::string& dir, const StellarJob& job,
-                                             const StellarJobResult& result) {
+                                             const StellarJobResult& result,
+                                             const std::vector<std::pair<std::string, std::string>>& extra_files) {
   // Every text is formatted before the first file is written: a failure leaves no partial set.
   std::vector<std::pair<std::string, std::string>> files;
   files.emplace_back("calibration.json", FormatStellarJson(job, result));
@@ -205,6 +206,7 @@ std::vector<std::string> WriteStellarOutputs(const std::string& dir, const Stell
                        "# " + job.title + "\n# Format: docs/definitions.md\n\n" +
                            ToToml(StellarCameraDefinition(job, result, static_cast<int>(k))));
   }
+  files.insert(files.end(), extra_files.begin(), extra_files.end());
   return WriteOutputFiles(dir, files);
 }
 

@@ -32,7 +32,8 @@ PlotVector BalancedCorrection(const DistortionProfile& profile, const BundleCame
 Figure FieldFigure(const DistortionProfile& profile, const BundleCameraResult& camera, const std::string& balance) {
   const double w = camera.format_width_mm > 0 ? camera.format_width_mm : 1.0;
   const double h = camera.format_height_mm > 0 ? camera.format_height_mm : 1.0;
-  VectorPanel panel{"camera " + camera.name, {}};
+  VectorPanel panel;
+  panel.title = "camera " + camera.name;
   const int n = 15;
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {

@@ -38,12 +38,6 @@ void FormatRange(const BundleResult& result, const std::string& camera, AxisRang
 
 }  // namespace
 
-std::string Slug(const std::string& id) {
-  std::string out;
-  for (char c : id) out += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' ? c : '_';
-  return out.empty() ? "_" : out;
-}
-
 FigureSection ResidualVectorFigures(const BundleResult& result, const BundleInput& input,
                                     const BundleHtmlOptions& options) {
   FigureSection section{"residuals", "Residual vectors per frame", {}, {}};

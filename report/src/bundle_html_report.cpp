@@ -1,51 +1,61 @@
 // FormatBundleHtmlReport (bundle_html_report.h): the page and its plot files.
 #include "platemeter/report/bundle_html_report.h"
 
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include "bundle_figures.h"
 #include "platemeter/core/error.h"
 #include "platemeter/core/markup.h"
+#include "platemeter/core/version.h"
+#include "platemeter/report/certificate.h"
 
 namespace platemeter::report {
 namespace {
 
-constexpr const char* kStyle = R"(body { font-family: "DejaVu Sans", Arial, sans-serif; margin: 2em auto; max-width: 1300px; color: #222; }
-h1 { font-size: 1.5em; } h2 { border-bottom: 1px solid #ccc; margin-top: 2em; } h3 { font-size: 1.05em; }
-table { border-collapse: collapse; margin: 0.6em 0; font-size: 0.85em; }
-th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; } th { background: #f0f0f0; }
-td.num, th.num { text-align: right; font-variant-numeric: tabular-nums; }
-nav ul { columns: 2; } figure { margin: 1.2em 0; } figure img { max-width: 100%; height: auto; border: 1px solid #ddd; }
-figcaption { font-size: 0.85em; color: #444; max-width: 60em; } .note { color: #a33; })";
-
-std::string FigureHtml(const Figure& f) {
-  return fmt::format(
-      "<figure id=\"{0}\"><a href=\"plots/{0}.svg\"><img src=\"plots/{0}.png\" width=\"{1}\" height=\"{2}\" "
-      "alt=\"{3}\"></a>\n<figcaption>{3} <a href=\"plots/{0}.svg\">SVG</a></figcaption></figure>\n",
-      f.stem, f.files.width_px, f.files.height_px, EscapeMarkup(f.caption));
-}
-
-std::string Page(const std::string& title, const std::string& summary, const std::string& tables,
-                 const std::vector<FigureSection>& sections) {
-  std::string out = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" +
-                    EscapeMarkup(title) + "</title>\n<style>\n" + kStyle + "\n</style>\n</head>\n<body>\n";
-  out += "<h1>" + EscapeMarkup(title) + "</h1>\n<p>" + EscapeMarkup(summary) + "</p>\n";
-  out += "<nav><h2>Contents</h2>\n<ul>\n<li><a href=\"#tables\">Tables: the calibration (seed 000 Tables 1-4 form) "
-         "and the adjustment</a></li>\n";
-  for (const FigureSection& s : sections) {
-    if (s.figures.empty() && s.notes.empty()) continue;
-    out += fmt::format("<li><a href=\"#{}\">{}</a> ({} plot{})</li>\n", s.anchor, EscapeMarkup(s.title),
-                       s.figures.size(), s.figures.size() == 1 ? "" : "s");
+// The certificate of camera k: the balanced lens of seed 000 section 3.2.
+Certificate BundleCertificate(const BundleResult& result, int k, const BundleReportOptions& report_options) {
+  const BundleCameraResult& camera = result.cameras[k];
+  Certificate c;
+  c.camera = camera.name + (camera.definition && !camera.definition->description.empty()
+                                ? " — " + camera.definition->description
+                                : "");
+  c.issued_by = std::string("platemeter ") + kVersion;
+  c.method = fmt::format("Self-calibrating bundle adjustment (seed 000): sigma0 = {:.3f} with {:.0f} degrees of "
+                         "freedom; datum: {}",
+                         result.adjustment.sigma0, result.adjustment.dof, result.datum_words);
+  const double corner = FormatHalfDiagonal_mm(camera.format_width_mm, camera.format_height_mm);
+  const DistortionProfile whole = BundleDistortionProfile(result, k, report_options, {corner});
+  const double c_prime = whole.calibrated_focal_length_mm.value;
+  c.elements.push_back({"Calibrated focal length c'", c_prime, whole.calibrated_focal_length_mm.sigma, "mm", 4});
+  c.elements.push_back({"Principal distance c", camera.values[0], camera.sigmas[0].value_or(0.0), "mm", 4});
+  c.elements.push_back({"Principal point xp (from the frame's origin)", 1e3 * camera.values[1],
+                        1e3 * camera.sigmas[1].value_or(0.0), "µm", 2});
+  c.elements.push_back({"Principal point yp", 1e3 * camera.values[2], 1e3 * camera.sigmas[2].value_or(0.0), "µm", 2});
+  std::vector<double> radii;
+  const std::vector<double> angles = CertificateFieldAngles_deg(c_prime, corner);
+  for (double a : angles) radii.push_back(c_prime * std::tan(a * M_PI / 180.0));
+  const DistortionProfile table = BundleDistortionProfile(result, k, report_options, radii);
+  for (size_t i = 0; i < angles.size() && i < table.rows.size(); ++i) {
+    const DistortionProfileRow& r = table.rows[i];
+    c.distortion.push_back(
+        {angles[i], r.r_mm, r.radial_um, r.radial_sigma_um, r.decentering_um, r.decentering_sigma_um});
   }
-  out += "</ul>\n</nav>\n<section id=\"tables\">\n" + tables + "</section>\n";
-  for (const FigureSection& s : sections) {
-    if (s.figures.empty() && s.notes.empty()) continue;
-    out += fmt::format("<section id=\"{}\">\n<h2>{}</h2>\n", s.anchor, EscapeMarkup(s.title));
-    for (const std::string& note : s.notes) out += "<p class=\"note\">" + EscapeMarkup(note) + "</p>\n";
-    for (const Figure& f : s.figures) out += FigureHtml(f);
-    out += "</section>\n";
+  c.distortion_words = "Radial distortion δ'r (seed 000 eq. 14), " + BundleBalanceWords(result, k, report_options) +
+                       ", at the distance c' tan(field angle) from the principal point; decentering: the profile P(r) "
+                       "(eq. 15), the largest tangential component there.";
+  long observations = 0;
+  int frames = 0;
+  for (const BundleFrameResult& f : result.frames) {
+    if (f.camera != camera.name) continue;
+    ++frames;
+    observations += f.observations;
   }
-  return out + "</body>\n</html>\n";
+  c.data_used = {fmt::format("{} frames of this camera, {} image observations used", frames, observations),
+                 fmt::format("{} points in the adjustment", result.points.size()),
+                 result.adjustment.summary};
+  return c;
 }
 
 }  // namespace
@@ -76,14 +86,22 @@ std::vector<std::pair<std::string, std::string>> FormatBundleHtmlReport(const Bu
       ResidualVectorFigures(result, input, options), ResidualHistogramFigures(result), NetworkFigures(result, input),
       CorrelationFigures(result), DistortionFigures(result, report_options, options)};
   std::vector<std::pair<std::string, std::string>> files;
-  files.emplace_back("report.html",
-                     Page(report_options.title, result.adjustment.summary, ToHtmlElements(document), sections));
-  for (const FigureSection& s : sections) {
-    for (const Figure& f : s.figures) {
-      files.emplace_back("plots/" + f.stem + ".png", f.files.png);
-      files.emplace_back("plots/" + f.stem + ".svg", f.files.svg);
+  std::vector<std::pair<std::string, std::string>> links;
+  for (size_t k = 0; k < result.cameras.size(); ++k) {
+    const std::string name = result.cameras.size() == 1 ? "certificate.html"
+                                                        : "certificate-" + Slug(result.cameras[k].name) + ".html";
+    try {
+      files.emplace_back(name, FormatCertificateHtml(BundleCertificate(result, static_cast<int>(k), report_options)));
+      links.emplace_back(name, "Report of calibration, camera " + result.cameras[k].name);
+    } catch (const Error&) {
+      // A camera whose lens was not adjusted has no distortion to certify; the report says why.
     }
   }
+  HtmlPage page{report_options.title, result.adjustment.summary, links,
+                "Tables: the calibration (seed 000 Tables 1-4 form) and the adjustment", ToHtmlElements(document),
+                sections};
+  files.insert(files.begin(), {"report.html", FormatHtmlPage(page)});
+  AppendFigureFiles(sections, &files);
   return files;
 }
 

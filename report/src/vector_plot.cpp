@@ -15,6 +15,7 @@ namespace {
 
 constexpr double kMargin = 60.0;   // px; left and bottom labels
 constexpr double kTitle = 34.0;    // px; a panel's title above its frame
+constexpr double kKeyY = 66.0;     // px; baseline of the colour key (under the scale bar)
 
 // The panel's vectors, or the means of its cells when there are too many.
 std::vector<PlotVector> ToDraw(const VectorPanel& panel, const PlotFrame& frame, const VectorPlotOptions& options,
@@ -34,13 +35,14 @@ std::vector<PlotVector> ToDraw(const VectorPanel& panel, const PlotFrame& frame,
     auto& [sum, count] = cells[key];
     sum.dx_um += v.dx_um;
     sum.dy_um += v.dy_um;
+    sum.rgb = kVectorRed;
     ++count;
   }
   std::vector<PlotVector> means;
   for (const auto& [key, entry] : cells) {
     const auto& [sum, count] = entry;
     means.push_back({frame.x.min + (key.first + 0.5) * cell, frame.y.min + (key.second + 0.5) * cell,
-                     sum.dx_um / count, sum.dy_um / count});
+                     sum.dx_um / count, sum.dy_um / count, kVectorRed});
     members->push_back(count);
   }
   out->legend = fmt::format("{} {}s; arrows: the mean per {:.3g} mm cell", panel.vectors.size(),
@@ -54,6 +56,10 @@ AxisRange Extent(const std::vector<VectorPanel>& panels, bool x) {
     for (const PlotVector& v : p.vectors) {
       lo = std::min(lo, x ? v.x_mm : v.y_mm);
       hi = std::max(hi, x ? v.x_mm : v.y_mm);
+    }
+    for (const PlotMarker& m : p.markers) {
+      lo = std::min(lo, x ? m.x_mm : m.y_mm);
+      hi = std::max(hi, x ? m.x_mm : m.y_mm);
     }
   }
   return NiceRange(lo, hi);
@@ -93,15 +99,39 @@ void DrawPanel(cairo_t* cr, const VectorPanel& panel, const VectorPanelDrawn& dr
   cairo_rectangle(cr, f.left_px, f.top_px, f.width_px, f.height_px);
   cairo_clip(cr);
   const size_t n = drawn.drawn.size();
+  const double marker_px = panel.markers.size() > 3000 ? 0.8 : small ? 1.2 : 1.8;
+  for (const PlotMarker& m : panel.markers) {
+    SetColour(cr, m.rgb);
+    cairo_arc(cr, f.PxX(m.x_mm), f.PxY(m.y_mm), marker_px, 0, 2 * M_PI);
+    cairo_fill(cr);
+  }
   SetColour(cr, 0x1f4e9a);
   for (const DrawnVector& d : drawn.drawn) {
     cairo_rectangle(cr, d.x_px - 0.75, d.y_px - 0.75, 1.5, 1.5);
   }
   cairo_fill(cr);
-  SetColour(cr, 0xc0392b);
   cairo_set_line_width(cr, n > 2000 ? 0.4 : n > 300 ? 0.7 : 1.0);
-  for (const DrawnVector& d : drawn.drawn) DrawArrow(cr, d, n <= 300);
-  cairo_stroke(cr);
+  // One stroke per colour run (vectors come grouped by colour, e.g. by trail).
+  for (size_t i = 0; i < n;) {
+    const unsigned rgb = drawn.drawn[i].rgb;
+    SetColour(cr, rgb);
+    for (; i < n && drawn.drawn[i].rgb == rgb; ++i) DrawArrow(cr, drawn.drawn[i], n <= 300);
+    cairo_stroke(cr);
+  }
+  for (const PlotLine& l : panel.lines) {
+    SetColour(cr, l.rgb);
+    cairo_set_line_width(cr, 1.0);
+    const double dash[] = {6.0, 4.0};
+    cairo_set_dash(cr, dash, l.dashed ? 2 : 0, 0.0);
+    cairo_move_to(cr, f.PxX(l.x0_mm), f.PxY(l.y0_mm));
+    cairo_line_to(cr, f.PxX(l.x1_mm), f.PxY(l.y1_mm));
+    cairo_stroke(cr);
+    cairo_set_dash(cr, nullptr, 0, 0.0);
+  }
+  SetColour(cr, 0x000000);
+  for (const PlotLabel& label : panel.labels) {
+    DrawText(cr, f.PxX(label.x_mm), f.PxY(label.y_mm), label.text, TextAlign::kCenter, small ? 8 : 10, true);
+  }
   cairo_restore(cr);
 }
 
@@ -129,12 +159,13 @@ VectorPlot DrawVectorPlot(const std::vector<VectorPanel>& panels, const VectorPl
   const AxisRange x = options.x_mm.max > options.x_mm.min ? options.x_mm : Extent(panels, true);
   const AxisRange y = options.y_mm.max > options.y_mm.min ? options.y_mm : Extent(panels, false);
   const double cell_w = panel_px + kMargin + 20, cell_h = panel_px + kMargin + kTitle;
+  const double top = options.colour_key.empty() ? 60.0 : 80.0;  // px; the header (title, scale bar, key)
   std::vector<std::vector<PlotVector>> vectors;
   std::vector<std::vector<int>> members(panels.size());
   for (size_t i = 0; i < panels.size(); ++i) {
     VectorPanelDrawn& d = plot.panels.emplace_back();
-    d.frame = MakePlotFrame(kMargin + (i % columns) * cell_w, 60 + kTitle + (i / columns) * cell_h, panel_px, panel_px,
-                            x, y, true);
+    d.frame = MakePlotFrame(kMargin + (i % columns) * cell_w, top + kTitle + (i / columns) * cell_h, panel_px,
+                            panel_px, x, y, true);
     vectors.push_back(ToDraw(panels[i], d.frame, options, &d, &members[i]));
   }
   plot.px_per_um = options.px_per_um > 0 ? options.px_per_um : AutoScale(vectors, panel_px);
@@ -146,10 +177,10 @@ VectorPlot DrawVectorPlot(const std::vector<VectorPanel>& panels, const VectorPl
       const PlotVector& v = vectors[i][k];
       // y up in the plate, down in the picture.
       d.drawn.push_back({d.frame.PxX(v.x_mm), d.frame.PxY(v.y_mm), v.dx_um * plot.px_per_um,
-                         -v.dy_um * plot.px_per_um, std::hypot(v.dx_um, v.dy_um), members[i][k]});
+                         -v.dy_um * plot.px_per_um, std::hypot(v.dx_um, v.dy_um), members[i][k], v.rgb});
     }
   }
-  const int width = static_cast<int>(columns * cell_w + 10), height = static_cast<int>(60 + rows * cell_h + 10);
+  const int width = static_cast<int>(columns * cell_w + 10), height = static_cast<int>(top + rows * cell_h + 10);
   plot.files = RenderPlot(width, height, [&](cairo_t* cr) {
     SetColour(cr, 0x000000);
     DrawText(cr, kMargin, 22, options.title, TextAlign::kLeft, 13, true);
@@ -165,6 +196,15 @@ VectorPlot DrawVectorPlot(const std::vector<VectorPanel>& panels, const VectorPl
              fmt::format("{:g} µm {} (vectors at {:.3g} px per µm; the axes in mm)", plot.scale_bar_um,
                          options.vector_words, plot.px_per_um),
              TextAlign::kLeft, 11);
+    double key_x = kMargin;
+    for (const auto& [words, rgb] : options.colour_key) {
+      SetColour(cr, rgb);
+      cairo_rectangle(cr, key_x, kKeyY - 8, 10, 10);
+      cairo_fill(cr);
+      SetColour(cr, 0x000000);
+      DrawText(cr, key_x + 14, kKeyY, words, TextAlign::kLeft, 11);
+      key_x += 24 + 7.0 * words.size();
+    }
     for (size_t i = 0; i < panels.size(); ++i) DrawPanel(cr, panels[i], plot.panels[i], panels.size() > 1);
   });
   return plot;

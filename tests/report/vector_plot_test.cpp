@@ -18,7 +18,8 @@ VectorPanel RandomPanel(int n, unsigned seed, double systematic_um) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> position(-27.0, 27.0);
   std::normal_distribution<double> noise(0.0, 3.0);
-  VectorPanel panel{"frame", {}};
+  VectorPanel panel;
+  panel.title = "frame";
   for (int i = 0; i < n; ++i) {
     const double x = position(rng), y = position(rng);
     // A radial pattern (the systematic part) plus noise.
@@ -54,7 +55,9 @@ TEST(VectorPlot, AVectorInThePngIsAsLongAsStated) {
   o.x_mm = {-10, 10};
   o.y_mm = {-10, 10};
   o.px_per_um = 20.0;  // 10 um -> 200 px
-  const VectorPanel panel{"one", {{-5.0, 0.0, 10.0, 0.0}}};
+  VectorPanel panel;
+  panel.title = "one";
+  panel.vectors = {{-5.0, 0.0, 10.0, 0.0}};
   const VectorPlot plot = DrawVectorPlot({panel}, o);
   testing::PngPixels png(plot.files.png);
   ASSERT_TRUE(png.ok());

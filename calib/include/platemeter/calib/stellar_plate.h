@@ -79,6 +79,8 @@ struct StarImageObservation {
   double x_mm = 0.0, y_mm = 0.0;             // plate frame
   double sigma_x_mm = 0.0, sigma_y_mm = 0.0; // > 0
   std::string origin;          // file:line, for messages
+  std::string trail;           // the trail it belongs to (e.g. "T2"; empty: a single star image); for the plots
+  long dot = -1;               // its index within the trail (-1: none)
 };
 
 struct CatalogEntry {

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "platemeter/calib/stellar_job.h"
+#include "platemeter/core/text_document.h"
 
 namespace platemeter {
 
@@ -43,6 +44,8 @@ struct ReportedCamera {
 ReportedCamera ReportCamera(DistortionModelId lens, const StellarCamera& values, const StellarCamera& sigmas);
 
 std::string FormatStellarJson(const StellarJob& job, const StellarJobResult& result);
+// report.md's content as blocks (also the HTML report's tables, report/stellar_html_report.h).
+TextDocument StellarReportDocument(const StellarJob& job, const StellarJobResult& result);
 std::string FormatStellarMarkdown(const StellarJob& job, const StellarJobResult& result);
 std::string FormatStellarResidualsCsv(const StellarJobResult& result);
 std::string FormatIdentificationCsv(const StellarJobResult& result);
@@ -52,8 +55,10 @@ std::string FormatIdentificationCsv(const StellarJobResult& result);
 // and sigmas, from its last combination or its first plate.
 CameraDefinition StellarCameraDefinition(const StellarJob& job, const StellarJobResult& result, int camera);
 
-// Writes the outputs into `dir` (created); returns the paths written.
+// Writes the outputs into `dir` (created), with `extra_files` (relative path,
+// bytes; e.g. the HTML report) in the same set; returns the paths written.
 std::vector<std::string> WriteStellarOutputs(const std::string& dir, const StellarJob& job,
-                                             const StellarJobResult& result);
+                                             const StellarJobResult& result,
+                                             const std::vector<std::pair<std::string, std::string>>& extra_files = {});
 
 }  // namespace platemeter

@@ -15,14 +15,39 @@
 
 namespace platemeter::report {
 
+inline constexpr unsigned kVectorRed = 0xc0392b;
+
 struct PlotVector {
   double x_mm = 0.0, y_mm = 0.0;    // where it starts (plate frame: x right, y up)
   double dx_um = 0.0, dy_um = 0.0;  // the vector (residual or correction)
+  unsigned rgb = kVectorRed;        // its colour (e.g. one per star trail); cell means are red
+};
+
+// A dot at a point (e.g. a measured star image), in its colour.
+struct PlotMarker {
+  double x_mm = 0.0, y_mm = 0.0;
+  unsigned rgb = 0x1f4e9a;
+};
+
+// A line over the panel (e.g. the axis of maximum tangential distortion), dashed or solid.
+struct PlotLine {
+  double x0_mm = 0.0, y0_mm = 0.0, x1_mm = 0.0, y1_mm = 0.0;
+  bool dashed = true;
+  unsigned rgb = 0x000000;
+};
+
+// A text at a point (e.g. a corner reseau number keying the plot to the focal plane).
+struct PlotLabel {
+  double x_mm = 0.0, y_mm = 0.0;
+  std::string text;
 };
 
 struct VectorPanel {
   std::string title;  // e.g. the frame id
   std::vector<PlotVector> vectors;
+  std::vector<PlotMarker> markers;  // drawn under the vectors; count in the extent
+  std::vector<PlotLine> lines;      // clipped to the panel
+  std::vector<PlotLabel> labels;
 };
 
 struct VectorPlotOptions {
@@ -34,6 +59,8 @@ struct VectorPlotOptions {
   int cells_across = 24;      // the aggregation grid along the longer side
   int panel_px = 0;           // a panel's data area; 0: 560 for one panel, 240 for several
   int columns = 0;            // 0: ceil(sqrt(panels))
+  // A key of the colours under the title, e.g. {"trail 1", 0x1f77b4}; empty: none.
+  std::vector<std::pair<std::string, unsigned>> colour_key;
 };
 
 struct DrawnVector {
@@ -41,6 +68,7 @@ struct DrawnVector {
   double dx_px = 0.0, dy_px = 0.0;  // the drawn vector (y down)
   double length_um = 0.0;           // the vector's length (the cell mean's, when aggregated)
   int members = 1;                  // vectors it stands for (1, or a cell's count)
+  unsigned rgb = kVectorRed;        // its colour
 };
 
 struct VectorPanelDrawn {

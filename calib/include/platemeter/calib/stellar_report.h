@@ -7,6 +7,7 @@
 //                      frame, um; other lens models: plate frame, own names)
 //   residuals.csv      one row per image: plate, image, star, status, vx, vy (um), reason
 //   identification.csv one row per detected star: plate, star key, catalog key, status
+//   extra_files        e.g. report.html, certificate.html and plots/ (report/stellar_html_report.h)
 //   camera-NAME-stellar.toml  per camera: the calibrated camera (its last
 //                      combination, or its first plate) as a definition `measure` loads
 // With plates of several cameras sharing exposures, calibration.json and

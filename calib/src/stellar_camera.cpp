@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Cholesky>
 #include <fmt/format.h>
 
 #include "platemeter/calib/stellar_plate.h"
 #include "platemeter/core/error.h"
+#include "stellar_internal.h"
 
 namespace platemeter {
 namespace {
@@ -98,6 +100,19 @@ StellarCamera StellarCameraToPrinted(const StellarCamera& plate_frame) {
   if (plate_frame.size() != kStellarCameraParams)
     throw Error("stellar camera", "seed 001's printed frame holds orbigon-11 cameras only");
   return MirrorY(plate_frame);
+}
+
+Eigen::MatrixXd stellar_internal::InverseOverRows(const Eigen::MatrixXd& matrix, const std::vector<int>& rows) {
+  Eigen::MatrixXd sub(rows.size(), rows.size());
+  for (size_t a = 0; a < rows.size(); ++a) {
+    for (size_t b = 0; b < rows.size(); ++b) sub(a, b) = matrix(rows[a], rows[b]);
+  }
+  const Eigen::MatrixXd inverse = sub.ldlt().solve(Eigen::MatrixXd::Identity(sub.rows(), sub.cols()));
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(matrix.rows(), matrix.cols());
+  for (size_t a = 0; a < rows.size(); ++a) {
+    for (size_t b = 0; b < rows.size(); ++b) out(rows[a], rows[b]) = inverse(a, b);
+  }
+  return out;
 }
 
 StellarCamera NominalStellarCamera(double principal_distance_mm, DistortionModelId lens) {

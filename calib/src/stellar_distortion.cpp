@@ -5,12 +5,12 @@
 #include <cmath>
 #include <functional>
 
-#include <Eigen/Cholesky>
 
 #include <fmt/format.h>
 
 #include "platemeter/calib/stellar_lens.h"
 #include "platemeter/core/error.h"
+#include "stellar_internal.h"
 
 namespace platemeter {
 namespace {
@@ -109,28 +109,20 @@ std::pair<double, double> WithSigma(const StellarLensEstimate& e, const std::fun
   return {value, std::sqrt(std::max(0.0, variance))};
 }
 
-Eigen::MatrixXd PseudoInverse(const Eigen::MatrixXd& information) {
+// The covariance of the estimable parameters (non-zero diagonal of the information).
+Eigen::MatrixXd CofactorOf(const Eigen::MatrixXd& information) {
   std::vector<int> rows;
   for (int i = 0; i < information.rows(); ++i) {
     if (information(i, i) > 0.0) rows.push_back(i);
   }
-  Eigen::MatrixXd sub(rows.size(), rows.size());
-  for (size_t a = 0; a < rows.size(); ++a) {
-    for (size_t b = 0; b < rows.size(); ++b) sub(a, b) = information(rows[a], rows[b]);
-  }
-  const Eigen::MatrixXd inverse = sub.ldlt().solve(Eigen::MatrixXd::Identity(sub.rows(), sub.cols()));
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(information.rows(), information.cols());
-  for (size_t a = 0; a < rows.size(); ++a) {
-    for (size_t b = 0; b < rows.size(); ++b) out(rows[a], rows[b]) = inverse(a, b);
-  }
-  return out;
+  return stellar_internal::InverseOverRows(information, rows);
 }
 
 }  // namespace
 
 StellarLensEstimate PlateLensEstimate(const StellarPlateResult& plate, DistortionModelId lens) {
   StellarLensEstimate e{lens, plate.camera, {}};
-  e.covariance = plate.m_o * plate.m_o * PseudoInverse(plate.camera_information);
+  e.covariance = plate.m_o * plate.m_o * CofactorOf(plate.camera_information);
   return e;
 }
 

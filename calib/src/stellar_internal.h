@@ -108,6 +108,10 @@ void StepPlate(const PlateLinearization& lin, const Eigen::VectorXd& camera_step
 
 // Whether camera parameter i is held fixed by the options.
 bool CameraParameterFixed(const StellarOptions& options, int i);
+
+// The inverse of the symmetric matrix's block over `rows` (the estimable
+// parameters), zero elsewhere: cofactor <-> information of a camera block.
+Eigen::MatrixXd InverseOverRows(const Eigen::MatrixXd& matrix, const std::vector<int>& rows);
 // Throws platemeter::Error(subject, ...) unless `camera` has the options'
 // lens model's count of finite values and a positive principal distance.
 void CheckCamera(const StellarCamera& camera, const StellarOptions& options, const std::string& subject);

@@ -35,16 +35,7 @@ Eigen::MatrixXd InformationOf(const AdjustmentResult& result, const std::vector<
   for (int k = 0; k < static_cast<int>(indices.size()); ++k) {
     if (result.covariance_row[indices[k]] >= 0) estimable.push_back(k);
   }
-  Eigen::MatrixXd sub(estimable.size(), estimable.size());
-  for (size_t a = 0; a < estimable.size(); ++a) {
-    for (size_t b = 0; b < estimable.size(); ++b) sub(a, b) = q(estimable[a], estimable[b]);
-  }
-  const Eigen::MatrixXd inverse = sub.ldlt().solve(Eigen::MatrixXd::Identity(sub.rows(), sub.cols()));
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(indices.size(), indices.size());
-  for (size_t a = 0; a < estimable.size(); ++a) {
-    for (size_t b = 0; b < estimable.size(); ++b) out(estimable[a], estimable[b]) = inverse(a, b);
-  }
-  return out;
+  return stellar_internal::InverseOverRows(q, estimable);
 }
 
 OrientationSetResult OrientationOf(const AdjustmentResult& result, const std::string& label, int index,

@@ -81,8 +81,8 @@ Certificate StellarCertificate(const StellarJob& job, const StellarJobResult& re
   const StellarProfile whole = ComputeStellarProfile(lens, max_mm, 2);
   const double sigma = std::sqrt(std::max(0.0, lens.covariance(0, 0)));
   c.elements.push_back({"Calibrated focal length C' (equal-area radial distortion)", whole.transformed_focal_length_mm,
-                        whole.transformed_focal_length_sigma_mm, "mm", 4});
-  c.elements.push_back({"Primary focal length C", lens.values[0], sigma, "mm", 4});
+                        whole.transformed_focal_length_sigma_mm, "mm", 5});
+  c.elements.push_back({"Primary focal length C", lens.values[0], sigma, "mm", 5});
   c.elements.push_back({"Principal point x (from the reseau centre)", 1e3 * lens.values[1],
                         1e3 * std::sqrt(std::max(0.0, lens.covariance(1, 1))), "µm", 2});
   c.elements.push_back({"Principal point y", 1e3 * lens.values[2], 1e3 * std::sqrt(std::max(0.0, lens.covariance(2, 2))),

@@ -4,7 +4,7 @@
     scripts/stellar_camera_z.py CAL_DIR/calibration.json [--camera grids/builtin/orbigon.toml] [--plate ID]
 
 Prints each plate-frame parameter of calibration.json (`platemeter calibrate stellar`), the truth, the stated sigma
-and z = (value - truth) / sigma, and m_o. The truth is the camera definition's lens (the builtin orbigon: seed 001
+and z = (value - truth) / sigma, and m_o, for every plate and every combination (the weighted mean). The truth is the camera definition's lens (the builtin orbigon: seed 001
 Table 3, printed left-handed frame) turned into the plate frame as StellarCameraFromModel does: y and Phi_T
 mirrored, xs/ys from the principal point (the values StellarPlate.RecoversTheTrueLensWithinThreeSigma prints as
 its truth column). Standard library only (tomllib: Python 3.11).
@@ -55,12 +55,7 @@ def main():
     truth = truth_plate_frame(args.camera, args.camera_name)
     with open(args.calibration) as f:
         cal = json.load(f)
-    for plate in cal["plates"]:
-        if args.plate and plate["id"] != args.plate:
-            continue
-        cam = plate["camera"]["plate_frame"]
-        print(f"plate {plate['id']}: {plate.get('images')} images of {plate.get('catalog_stars')} catalog stars, "
-              f"{plate.get('rejected_images')} rejected")
+    def table(cam):
         print(f"{'parameter':<11}{'value':>16}{'truth':>16}{'sigma':>12}{'z':>8}")
         for name, t in truth.items():
             v, s = cam[name]["value"], cam[name]["sigma"]
@@ -68,8 +63,19 @@ def main():
             if name.startswith("Phi"):
                 d = math.remainder(d, 2 * math.pi)
             print(f"{name:<11}{v:16.8g}{t:16.8g}{s:12.3g}{d / s:8.2f}")
+
+    for plate in cal["plates"]:
+        if args.plate and plate["id"] != args.plate:
+            continue
+        print(f"plate {plate['id']}: {plate.get('images')} images of {plate.get('catalog_stars')} catalog stars, "
+              f"{plate.get('rejected_images')} rejected")
+        table(plate["camera"]["plate_frame"])
         dof = (plate.get("statistics") or {}).get("degrees_of_freedom")
         print(f"m_o {plate['m_o']:.3f}" + (f" with {dof:.0f} dof" if dof else ""))
+    for c in [] if args.plate else cal.get("combinations", []):
+        print(f"combination {c['name']}: plates {', '.join(c.get('plates', []))}")
+        table(c["camera"]["plate_frame"])
+        print(f"m_0 {c['m_0']:.3f} with {c.get('degrees_of_freedom', float('nan')):.0f} dof")
     return 0
 
 

@@ -18,8 +18,12 @@ namespace {
 using stellar_internal::CameraParameterFixed;
 
 constexpr int kMaxRelinearizations = 20;
-// The floor of the single-plate solves is ~1e-11 sigma.
+// Converged: the largest camera step below kConvergedStepSigma, or below
+// kRoundingFloorSigma and no longer halving -- Gauss-Newton converges
+// quadratically, so a step that stops shrinking there is rounding (with
+// ~10 000 images per plate the floor is ~5e-10 sigma; with a few hundred ~1e-11).
 constexpr double kConvergedStepSigma = 1e-10;
+constexpr double kRoundingFloorSigma = 1e-7;
 
 Eigen::VectorXd AsVector(const StellarCamera& c) {
   return Eigen::Map<const Eigen::VectorXd>(c.data(), static_cast<Eigen::Index>(c.size()));
@@ -151,6 +155,7 @@ StellarCombination CombineStellarPlates(const std::string& name, const std::vect
   // eliminated: the camera step from the summed reduced normals, then each
   // plate's step by back-substitution.
   std::vector<stellar_internal::PlateLinearization> lin(plates.size());
+  double previous = INFINITY;
   for (c.relinearizations = 1; c.relinearizations <= kMaxRelinearizations; ++c.relinearizations) {
     tbb::parallel_for(size_t{0}, plates.size(), [&](size_t i) {
       lin[i] = stellar_internal::LinearizePlate(plates[i], prepared[i], states[i], AsCamera(x), options);
@@ -164,12 +169,13 @@ StellarCombination CombineStellarPlates(const std::string& name, const std::vect
     x += step;
     double largest = 0.0;
     for (int i : free) largest = std::max(largest, std::abs(step[i]) / std::sqrt(c.cofactor(i, i)));
-    if (largest < kConvergedStepSigma) break;
+    if (largest < kConvergedStepSigma || (largest < kRoundingFloorSigma && largest > 0.5 * previous)) break;
+    previous = largest;
   }
   if (c.relinearizations > kMaxRelinearizations)
     throw Error("stellar combination", fmt::format("the relinearized mean did not converge in {} steps",
                                                    kMaxRelinearizations));
-  // The last step is below 1e-10 sigma: the statistics at the penultimate point are those of x.
+  // The last step is at the rounding floor: the statistics at the penultimate point are those of x.
   c.camera = AsCamera(x);
   CanonicalDecentering(&c.camera, &c.cofactor, options.lens_model);
   x = AsVector(c.camera);

@@ -1,28 +1,23 @@
 // platemeter batch INPUT_DIR|MANIFEST -o OUT (--camera NAME | --job JOB.toml): every scan of an
 // archive measured (RunMeasure) into OUT/<stem>/, resumable, shardable, with a summary CSV and an
-// HTML index (docs/batch.md). Thin over batch/ (listing, records, run loop) and measure_run.h.
+// HTML index (docs/batch.md). Thin over batch/: the plan and the work (measure_batch.h), the run loop.
 #include <sched.h>
 
 #include <csignal>
-#include <cstdlib>
 #include <filesystem>
 #include <iostream>
-#include <map>
 #include <optional>
-#include <sstream>
 #include <thread>
 
 #include "commands.h"
-#include "job.h"
-#include "measure_run.h"
 #include "platemeter/batch/batch_run.h"
 #include "platemeter/batch/interrupt.h"
-#include "platemeter/batch/scan_list.h"
+#include "platemeter/batch/measure_batch.h"
 #include "platemeter/batch/shard.h"
 #include "platemeter/batch/summary.h"
 #include "platemeter/core/error.h"
 #include "platemeter/grids/registry.h"
-#include "platemeter/measure/sha256.h"
+#include "platemeter/pipeline/job_file.h"
 
 namespace platemeter::cli {
 namespace {
@@ -47,45 +42,11 @@ struct BatchArguments {
   throw CLI::RuntimeError(code);
 }
 
-// Outputs also depend on the definition files (a camera's grid, fiducials) and on the passpoint
-// list's contents, which the options text names only by path: their digests join the fingerprint.
-std::string DefinitionsFingerprintText(const std::vector<std::string>& definition_files) {
-  std::ostringstream out;
-  std::vector<std::string> files;
-  if (const char* list = std::getenv("PLATEMETER_DEFINITIONS")) {
-    std::stringstream s(list);
-    for (std::string f; std::getline(s, f, ':');) {
-      if (!f.empty()) files.push_back(f);
-    }
-  }
-  files.insert(files.end(), definition_files.begin(), definition_files.end());
-  for (const std::string& f : files) out << "definitions_sha256 = " << Sha256HexOfFile(f) << "\n";
-  return out.str();
-}
-
-std::string PasspointListFingerprintText(const MeasureRequest& m) {
-  if (!m.detect.passpoints || m.detect.passpoints->list_file.empty()) return "";
-  return "passpoint_list_sha256 = " + Sha256HexOfFile(m.detect.passpoints->list_file) + "\n";
-}
-
 // The cores this process may run on (a Slurm task's allocation, taskset), not the machine's.
 int UsableCores() {
   cpu_set_t set;
   if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-}
-
-ScanWorkResult ToWorkResult(const MeasureSummary& s) {
-  ScanWorkResult r;
-  r.counts_by_status = s.counts_by_status;
-  r.counts_by_kind = s.counts_by_kind;
-  r.reseau_rms_um = s.reseau_rms_um;
-  r.scale_x = s.scale_x;
-  r.scale_y = s.scale_y;
-  r.written_files = s.written_files;
-  r.report_json = s.report_json;
-  r.plot_png = s.plot_png;
-  return r;
 }
 
 int SummaryOnly(const BatchArguments& args) {
@@ -106,58 +67,30 @@ int RunBatchCommand(const BatchArguments& args, const GlobalOptions& global) {
   if (args.jobs < 0) Fail(kExitUsage, "--jobs: must be at least 1");
 
   // Everything that can be wrong with the input is found before the first scan starts.
-  std::vector<BatchItem> items;
-  std::map<std::string, MeasureRequest> requests;  // by stem
   std::optional<DefinitionRegistry> registry;
-  Shard shard;
-  size_t listed = 0;
+  MeasureBatchPlan plan;
+  MeasureBatchRequest request;
+  request.input = args.input;
+  request.recursive = args.recursive;
+  request.out_dir = args.out_dir;
+  request.definition_files = global.definition_files;
   try {
-    shard = ParseShard(args.shard);
+    request.shard = ParseShard(args.shard);
     registry = DefinitionRegistry::Load(global.definition_files);
-    JobDefinition base;
-    if (!args.job_file.empty()) base = LoadJobFile(args.job_file);
+    pipeline::JobDefinition& base = request.job;
+    if (!args.job_file.empty()) base = pipeline::LoadJobFile(args.job_file);
     // Flags given with --camera or --job override the job's values, as for measure --job.
     if (!args.camera.empty()) base.measure.detect.camera = args.camera;
-    if (!args.orientation.empty()) ApplyJobOverride(base, "orientation", args.orientation);
-    if (!args.temperature_degC.empty()) ApplyJobOverride(base, "temperature_degC", args.temperature_degC);
-    if (!args.pixel_size_um.empty()) ApplyJobOverride(base, "pixel_size_um", args.pixel_size_um);
+    if (!args.orientation.empty()) pipeline::ApplyJobOverride(base, "orientation", args.orientation);
+    if (!args.temperature_degC.empty()) pipeline::ApplyJobOverride(base, "temperature_degC", args.temperature_degC);
+    if (!args.pixel_size_um.empty()) pipeline::ApplyJobOverride(base, "pixel_size_um", args.pixel_size_um);
     if (args.allow_ambiguous) base.measure.detect.allow_ambiguous = true;
-
-    std::vector<ScanInput> scans = ListScans(args.input, args.recursive, JobOverrideKeys());
-    // OUT inside INPUT (with --recursive): its plots are .png files, not scans.
-    std::error_code ec;
-    const std::string out_prefix = std::filesystem::weakly_canonical(args.out_dir, ec).string() + "/";
-    std::erase_if(scans, [&](const ScanInput& s) {
-      std::error_code e;
-      return std::filesystem::weakly_canonical(s.path, e).string().rfind(out_prefix, 0) == 0;
-    });
-    if (scans.empty()) throw Error(args.input, "no scan files (.tif .tiff .png .jpg .jpeg .fits .fit)");
-    CheckUniqueStems(scans);  // over the whole list, so every shard refuses the same archive
-    listed = scans.size();
-    const std::string definitions_text = DefinitionsFingerprintText(global.definition_files);
-    for (size_t i : ShardPositions(scans.size(), shard)) {
-      const ScanInput& scan = scans[i];
-      JobDefinition job = base;
-      for (const auto& [key, value] : scan.overrides) {
-        try {
-          ApplyJobOverride(job, key, value);
-        } catch (const Error& e) {
-          throw Error(args.input, "line " + std::to_string(scan.manifest_line) + ": " + e.reason());
-        }
-      }
-      if (job.measure.detect.camera.empty() && job.measure.detect.grid.empty()) {
-        throw Error(scan.path, "no camera: give --camera NAME or --job JOB.toml (or a camera column in the manifest)");
-      }
-      job.measure.detect.scan = scan.path;
-      BatchItem item;
-      item.input = scan;
-      item.options_text = CanonicalOptionsText(job.measure) + definitions_text + PasspointListFingerprintText(job.measure);
-      requests[scan.stem] = job.measure;
-      items.push_back(std::move(item));
-    }
+    plan = PlanMeasureBatch(request);
   } catch (const Error& e) {
     Fail(kExitUsage, e.what());
   }
+  const std::vector<BatchItem>& items = plan.items;
+  const Shard& shard = request.shard;
 
   BatchOptions options;
   options.out_dir = args.out_dir;
@@ -165,15 +98,10 @@ int RunBatchCommand(const BatchArguments& args, const GlobalOptions& global) {
   options.force = args.force;
   options.retry_failed = args.retry_failed;
   std::cerr << "batch: " << items.size() << " scans";
-  if (shard.count > 1) std::cerr << " (shard " << shard.index << "/" << shard.count << " of " << listed << ")";
+  if (shard.count > 1) std::cerr << " (shard " << shard.index << "/" << shard.count << " of " << plan.listed << ")";
   std::cerr << ", " << options.jobs << " at a time, into " << args.out_dir << "\n";
 
-  const DefinitionRegistry& reg = *registry;
-  const ScanWork work = [&requests, &reg](const BatchItem& item, const std::string& folder) {
-    MeasureRequest request = requests.at(item.input.stem);
-    request.out_dir = folder;
-    return ToWorkResult(RunMeasure(request, reg));
-  };
+  const ScanWork work = MeasureScanWork(plan, *registry);
   InstallBatchInterruptHandlers();
   ProgressReporter progress(items.size(), ProgressReporter::IsTerminal(stderr), stderr);
   const BatchOutcome outcome = RunBatch(items, work, options, &progress);

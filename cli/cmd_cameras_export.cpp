@@ -7,7 +7,7 @@
 #include "platemeter/calib/camera_export.h"
 #include "platemeter/core/error.h"
 #include "platemeter/grids/registry.h"
-#include "platemeter/measure/atomic_file.h"
+#include "platemeter/core/atomic_file.h"
 
 namespace platemeter::cli {
 namespace {

@@ -1,16 +1,15 @@
 // platemeter detect SCAN (--camera NAME | --grid NAME | --job JOB.toml) -o DIR: reseau
 // crosses and fiducial marks with ids, positions, sigmas and statuses (and stars,
 // trails, passpoints on request), into a measurement file and a JSON summary (the
-// flow is detect_run.cpp's; the options detect_options.cpp's).
+// flow is the pipeline's RunDetection, pipeline/detect_run.h; the options detect_options.cpp's).
 #include <filesystem>
 #include <iostream>
 #include <memory>
 
 #include "commands.h"
 #include "detect_options.h"
-#include "detect_run.h"
-#include "job.h"
-#include "platemeter/measure/atomic_file.h"
+#include "platemeter/pipeline/detect_run.h"
+#include "platemeter/pipeline/job_file.h"
 
 namespace platemeter::cli {
 
@@ -33,17 +32,13 @@ void RegisterDetectCommand(CLI::App& app, GlobalOptions& global) {
   cmd->add_option("--job", *job_file, "job definition file (docs/job.md); options given here override its values");
   cmd->add_option("-o,--output", *out_dir, "output folder")->required();
   cmd->callback([overlay, scan, out_dir, job_file, &global] {
-    DetectRequest request = overlay->Resolve(job_file->empty() ? DetectRequest{} : LoadJobFile(*job_file).measure.detect);
+    DetectRequest request =
+        overlay->Resolve(job_file->empty() ? DetectRequest{} : pipeline::LoadJobFile(*job_file).measure.detect);
     request.scan = *scan;
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
-    const DetectRun run = RunDetection(request, registry);
-    std::filesystem::create_directories(*out_dir);
-    const std::string stem = std::filesystem::path(request.scan).stem().string();
-    const std::string measurements = (std::filesystem::path(*out_dir) / (stem + ".measurements.csv")).string();
-    const std::string summary = (std::filesystem::path(*out_dir) / (stem + ".detect.json")).string();
-    WriteMeasurementFile(measurements, run.file);
-    WriteFileAtomically(summary, run.summary.dump(2) + "\n");
-    std::cout << run.messages << measurements << "\n" << summary << "\n";
+    const pipeline::DetectRun run = pipeline::RunDetection(request, registry);
+    const pipeline::DetectFiles files = pipeline::WriteDetectRun(run, request.scan, *out_dir);
+    std::cout << run.messages << files.measurements_csv << "\n" << files.summary_json << "\n";
   });
 }
 

@@ -1,24 +1,22 @@
 // platemeter measure SCAN --camera NAME ... -o DIR: detect, then the comparator
 // corrections into a measurement file with plate millimetres and a JSON report
-// (the flow is measure_run.cpp's); platemeter validate SCAN ...: the reseau check
-// alone (docs/measure.md). Both take --job JOB.toml (docs/job.md).
-#include <filesystem>
+// (the flow is the pipeline's RunMeasure, pipeline/measure_run.h); platemeter validate
+// SCAN ...: the reseau check alone (RunValidate; docs/measure.md). Both take
+// --job JOB.toml (docs/job.md).
 #include <iostream>
 #include <memory>
 
 #include "commands.h"
 #include "detect_options.h"
-#include "job.h"
-#include "measure_prepare.h"
-#include "measure_report.h"
-#include "measure_run.h"
 #include "platemeter/core/error.h"
 #include "platemeter/grids/registry.h"
-#include "platemeter/measure/atomic_file.h"
-#include "platemeter/measure/residual_plot.h"
+#include "platemeter/pipeline/job_file.h"
+#include "platemeter/pipeline/measure_run.h"
 
 namespace platemeter::cli {
 namespace {
+
+using pipeline::MeasureRequest;
 
 // The options of measure and validate: the scan's detection part and the corrections part, each laid
 // over the --job file's values.
@@ -29,7 +27,7 @@ struct MeasureOptions {
   std::string scan, out_dir, job_file;
 
   MeasureRequest Resolve(const std::string& command) const {
-    MeasureRequest request = job_file.empty() ? MeasureRequest{} : LoadJobFile(job_file).measure;
+    MeasureRequest request = job_file.empty() ? MeasureRequest{} : pipeline::LoadJobFile(job_file).measure;
     request.detect = detect.Resolve(request.detect);
     request = measure.Resolve(request);
     request.detect.scan = scan;
@@ -68,27 +66,7 @@ void RegisterValidate(CLI::App& app, GlobalOptions& global) {
   val->callback([o, &global] {
     const MeasureRequest request = o->Resolve("validate");
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
-    std::string messages;
-    PreparedMeasurement p = PrepareMeasurement(request, registry, false, &messages);
-    std::cout << messages;
-    const PlateCorrectionReport report = CorrectPlate(&p.file, *p.grid, p.options);
-    std::filesystem::create_directories(request.out_dir);
-    const std::string json = (std::filesystem::path(request.out_dir) / (p.stem + ".validate.json")).string();
-    WriteFileAtomically(json, ValidationJson(report, request.tolerance_um).dump(2) + "\n");
-    const std::string png = (std::filesystem::path(request.out_dir) / (p.stem + ".residuals.png")).string();
-    ResidualPlotOptions plot;
-    plot.tolerance_um = request.tolerance_um;
-    WriteResidualPlotPng(png, report.observations, report.fit, plot);
-    const ReseauFit& f = report.fit;
-    std::cout << "reseau fit (" << ReseauFitModelName(f.model) << "): " << f.used << " crosses, " << f.rejected
-              << " rejected, rms " << f.rms_mm * 1e3 << " um\n"
-              << "scale x " << f.scale_x.value << " +- " << f.scale_x.sigma << ", y " << f.scale_y.value << " +- "
-              << f.scale_y.sigma << ", non-orthogonality " << f.non_orthogonality_rad.value * kRadToArcsec << " +- "
-              << f.non_orthogonality_rad.sigma * kRadToArcsec << " arcsec\n"
-              << "scale discrepancy " << (f.mean_scale.value - 1.0) * 1e6 << " +- " << f.mean_scale.sigma * 1e6
-              << " ppm, as emulsion depth " << report.emulsion_depth_reading_um.value << " +- "
-              << report.emulsion_depth_reading_um.sigma << " um\n"
-              << json << "\n" << png << "\n";
+    pipeline::RunValidate(request, registry, std::cout);
   });
 }
 
@@ -114,7 +92,7 @@ void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global) {
   cmd->callback([o, &global] {
     const MeasureRequest request = o->Resolve("measure");
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
-    std::cout << RunMeasure(request, registry).message;
+    std::cout << pipeline::RunMeasure(request, registry).message;
   });
   RegisterValidate(app, global);
 }

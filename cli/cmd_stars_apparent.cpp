@@ -16,7 +16,7 @@
 #include <fmt/format.h>
 
 #include "platemeter/core/error.h"
-#include "platemeter/measure/atomic_file.h"
+#include "platemeter/core/atomic_file.h"
 
 namespace platemeter::cli {
 namespace {

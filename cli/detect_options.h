@@ -1,10 +1,14 @@
 #pragma once
 // The detection options shared by `platemeter detect` and `platemeter measure`,
 // registered over a base request (a job file's): option_overlay.h.
-#include "detect_run.h"
 #include "option_overlay.h"
+#include "platemeter/pipeline/detect_run.h"
 
 namespace platemeter::cli {
+
+using pipeline::DetectRequest;
+using pipeline::PasspointRequest;
+using pipeline::TrailRequest;
 
 // --pixel-size-um, --orientation, --allow-ambiguous-orientation.
 void AddScanOptions(OptionOverlay<DetectRequest>& overlay);

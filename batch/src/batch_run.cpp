@@ -22,7 +22,7 @@
 #include "platemeter/batch/summary.h"
 #include "platemeter/batch/temporaries.h"
 #include "platemeter/core/error.h"
-#include "platemeter/measure/sha256.h"
+#include "platemeter/core/sha256.h"
 
 namespace platemeter {
 namespace fs = std::filesystem;

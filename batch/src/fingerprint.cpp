@@ -1,6 +1,6 @@
 #include "platemeter/batch/fingerprint.h"
 
-#include "platemeter/measure/sha256.h"
+#include "platemeter/core/sha256.h"
 
 namespace platemeter {
 

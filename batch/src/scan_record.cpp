@@ -9,8 +9,8 @@
 
 #include "platemeter/core/error.h"
 #include "platemeter/core/log.h"
-#include "platemeter/measure/atomic_file.h"
-#include "platemeter/measure/sha256.h"
+#include "platemeter/core/atomic_file.h"
+#include "platemeter/core/sha256.h"
 
 namespace platemeter {
 namespace fs = std::filesystem;

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "platemeter/core/error.h"
-#include "platemeter/measure/atomic_file.h"
+#include "platemeter/core/atomic_file.h"
 
 namespace platemeter {
 namespace fs = std::filesystem;
@@ -32,7 +32,7 @@ int RemoveTemporaries(const std::string& folder) {
 
 void WriteSharedFileAtomically(const std::string& path, const std::string& contents) {
   const fs::path target(path);
-  // measure/atomic_file.h's temporary name is fixed per target: two shards finishing at the
+  // core/atomic_file.h's temporary name is fixed per target: two shards finishing at the
   // same moment would write into the same temporary. The pid makes it unique per process.
   std::string temp_name = ".";
   temp_name += target.filename().string();

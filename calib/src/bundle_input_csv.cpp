@@ -10,7 +10,7 @@
 
 #include "platemeter/calib/bundle_input_io.h"
 #include "platemeter/core/error.h"
-#include "platemeter/measure/atomic_file.h"
+#include "platemeter/core/atomic_file.h"
 
 namespace platemeter {
 namespace {

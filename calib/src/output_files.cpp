@@ -4,7 +4,7 @@
 #include <filesystem>
 
 #include "platemeter/core/error.h"
-#include "platemeter/measure/atomic_file.h"
+#include "platemeter/core/atomic_file.h"
 
 namespace platemeter {
 

@@ -7,7 +7,7 @@
 
 #include "platemeter/calib/precision_simulation.h"
 #include "platemeter/core/error.h"
-#include "platemeter/measure/atomic_file.h"
+#include "platemeter/core/atomic_file.h"
 
 namespace platemeter {
 namespace {

@@ -1,4 +1,4 @@
-// UTC handling for the apparent-place computation: ISO 8601 <-> ERFA two-part JD.
+// UTC instants: ISO 8601 <-> ERFA two-part JD.
 #include <algorithm>
 #include <cmath>
 #include <regex>
@@ -6,10 +6,11 @@
 #include <erfa.h>
 #include <fmt/format.h>
 
-#include "platemeter/calib/apparent_place.h"
+#include "platemeter/core/utc_time.h"
+
 #include "platemeter/core/error.h"
 
-namespace platemeter::calib {
+namespace platemeter {
 
 UtcInstant ParseUtcIso8601(const std::string& text) {
   // Only UTC is accepted (DESIGN.md: time is UTC); an explicit zero offset is fine.
@@ -56,4 +57,4 @@ UtcInstant UtcFromMjd(double mjd_utc) {
   return {2400000.5 + day, mjd_utc - day};
 }
 
-}  // namespace platemeter::calib
+}  // namespace platemeter

@@ -181,35 +181,6 @@ bool FitSimilarity(const MasterGrid& grid, const std::vector<CrossCandidate>& ca
 
 }  // namespace
 
-std::array<int, 4> ScanOrientation::PixelAxesFromPlate() const {
-  // Rotation by a multiple of 90 degrees in the plate frame (counter-clockwise, y up).
-  const int quarter = ((rotation_deg / 90) % 4 + 4) % 4;
-  static const int kCos[4] = {1, 0, -1, 0}, kSin[4] = {0, 1, 0, -1};
-  const int c = kCos[quarter], s = kSin[quarter];
-  const int mx = mirrored ? -1 : 1;
-  // flip_y * [[c, -s], [s, c]] * diag(mx, 1)
-  return {c * mx, -s, -s * mx, -c};
-}
-
-std::string ScanOrientation::Name() const { return std::to_string(rotation_deg) + (mirrored ? "m" : ""); }
-
-std::vector<ScanOrientation> ScanOrientation::All() {
-  std::vector<ScanOrientation> all;
-  for (bool mirrored : {false, true})
-    for (int rotation : {0, 90, 180, 270}) all.push_back({rotation, mirrored});
-  return all;
-}
-
-bool ParseScanOrientation(const std::string& text, ScanOrientation* orientation) {
-  for (const ScanOrientation& o : ScanOrientation::All()) {
-    if (o.Name() == text) {
-      *orientation = o;
-      return true;
-    }
-  }
-  return false;
-}
-
 bool GridAssignmentOptions::Check(std::string* why) const {
   if (!(pixel_size_um > 0.0)) return *why = "the scan's pixel size must be given", false;
   if (!(scale_tolerance > 0.0 && scale_tolerance < 0.5)) return *why = "scale_tolerance must be in (0, 0.5)", false;

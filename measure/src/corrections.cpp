@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "platemeter/detect/grid_assignment.h"
+#include "platemeter/core/scan_orientation.h"
 
 namespace platemeter {
 namespace {

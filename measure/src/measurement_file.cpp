@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "platemeter/core/error.h"
-#include "platemeter/measure/atomic_file.h"
+#include "platemeter/core/atomic_file.h"
 
 namespace platemeter {
 namespace {

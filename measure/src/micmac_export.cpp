@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "platemeter/measure/atomic_file.h"
+#include "platemeter/core/atomic_file.h"
 
 namespace platemeter {
 namespace {

@@ -1,7 +1,7 @@
 // The comparator corrections end to end (plate_corrections.h).
 #include "platemeter/measure/plate_corrections.h"
 
-#include "platemeter/detect/grid_assignment.h"
+#include "platemeter/core/scan_orientation.h"
 
 #include <cmath>
 #include <map>

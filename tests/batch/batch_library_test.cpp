@@ -17,9 +17,9 @@
 #include "platemeter/batch/shard.h"
 #include "platemeter/batch/summary.h"
 #include "platemeter/batch/temporaries.h"
+#include "platemeter/core/atomic_file.h"
 #include "platemeter/core/error.h"
-#include "platemeter/measure/atomic_file.h"
-#include "platemeter/measure/sha256.h"
+#include "platemeter/core/sha256.h"
 #include "support/test_support.h"
 
 namespace platemeter {
@@ -273,7 +273,7 @@ TEST(Summary, BuiltFromEveryRecordInOut) {
 
 TEST(Temporaries, RecognisesEveryWritersTemporaryName) {
   TempDir dir;
-  // The names measure/atomic_file.h uses, seen while a write is in flight: make one and look.
+  // The names core/atomic_file.h uses, seen while a write is in flight: make one and look.
   EXPECT_TRUE(IsTemporaryName(".p.measurements.partial.csv"));  // WriteFileAtomically(p.measurements.csv)
   EXPECT_TRUE(IsTemporaryName(".p.residuals.png.partial"));     // the residual plot
   EXPECT_TRUE(IsTemporaryName(".batch-summary.csv.partial.1234"));

@@ -1,7 +1,8 @@
 #pragma once
 // The run loop: every scan of the list measured in parallel (oneTBB, at most
 // `jobs` at a time), skipped when its record is current, recorded last and
-// atomically. The work on one scan is a function given by the caller (the CLI).
+// atomically. The work on one scan is a function given by the caller
+// (measure_batch.h: the pipeline's RunMeasure; tests: a fake).
 #include <functional>
 #include <map>
 #include <optional>
@@ -20,7 +21,7 @@ struct BatchItem {
   std::string options_text;
 };
 
-// What the work on one scan reports (the CLI fills it from RunMeasure).
+// What the work on one scan reports (MeasureScanWork fills it from RunMeasure).
 struct ScanWorkResult {
   std::map<std::string, int> counts_by_status;
   std::map<std::string, int> counts_by_kind;

@@ -1,7 +1,7 @@
 #pragma once
 // Temporaries left by a killed run. Every writer of the project names its
 // temporary "." + name + ".partial" + ... in the target's folder
-// (measure/atomic_file.h, the residual plot, core/image_writer.h), so a file
+// (core/atomic_file.h, the residual plot, core/image_writer.h), so a file
 // whose name starts with '.' and contains ".partial" is never a final output.
 #include <string>
 

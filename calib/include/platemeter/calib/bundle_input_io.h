@@ -52,7 +52,7 @@ std::vector<ImageObservation> ReadObservationsCsv(const std::string& path);
 // newline, surrounding spaces or a leading '#', non-finite numbers, sigmas not
 // > 0, a duplicated (frame, point_id)).
 std::string FormatObservationsCsv(const std::vector<ImageObservation>& observations);
-// Written atomically (measure/atomic_file.h); errors name `path`.
+// Written atomically (core/atomic_file.h); errors name `path`.
 void WriteObservationsCsv(const std::string& path, const std::vector<ImageObservation>& observations);
 
 // Ground points: point_id,x_m,y_m,z_m,sigma_x_m,sigma_y_m,sigma_z_m. Object

@@ -15,23 +15,11 @@
 #include <string>
 #include <vector>
 
+#include "platemeter/core/scan_orientation.h"
 #include "platemeter/detect/cross_candidates.h"
 #include "platemeter/grids/definitions.h"
 
 namespace platemeter {
-
-// How plate axes (x right, y up) lie on the scan: rotated counter-clockwise as
-// seen on the scan by rotation_deg, after mirroring x if mirrored (emulsion-down scans).
-struct ScanOrientation {
-  int rotation_deg = 0;  // 0, 90, 180, 270
-  bool mirrored = false;
-  std::string Name() const;  // "0", "90", "180", "270", "0m", ...
-  static std::vector<ScanOrientation> All();
-  // Plate axes onto pixel axes (row-major 2x2 of 0/+-1): mirror x, rotate by the
-  // orientation in the plate frame, then flip y because pixel rows run down.
-  std::array<int, 4> PixelAxesFromPlate() const;
-};
-bool ParseScanOrientation(const std::string& text, ScanOrientation* orientation);
 
 // pixel = A * plate_mm + t, A = scale * R(rotation) * O(orientation) with the y flip of pixel rows.
 struct PlateToPixel {

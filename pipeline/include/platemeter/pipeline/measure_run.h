@@ -1,15 +1,17 @@
 #pragma once
-// The `platemeter measure` flow as a function (detect, corrections, outputs),
-// shared by `platemeter measure` and `platemeter batch`.
+// The measure step of the pipeline (detect, corrections, outputs): RunMeasure for
+// `platemeter measure` and every scan of `platemeter batch` (batch/measure_batch.h),
+// RunValidate for `platemeter validate`.
 #include <map>
+#include <ostream>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "detect_run.h"
+#include "platemeter/pipeline/detect_run.h"
 #include "platemeter/grids/registry.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 
 // Every option of `platemeter measure` (docs/measure.md).
 struct MeasureRequest {
@@ -47,8 +49,14 @@ struct MeasureSummary {
 // too few crosses...). Prints nothing: the console text is in the summary's message.
 MeasureSummary RunMeasure(const MeasureRequest& request, const DefinitionRegistry& registry);
 
+// `platemeter validate`: the reseau check alone (no local step; reseau cameras only). Detects (or reads
+// detect's measurement file), fits the grid and writes <stem>.validate.json and <stem>.residuals.png
+// atomically into request.out_dir (creating it). Writes its console lines to `console` as it goes: the
+// detectors' lines before the fit, so that a scan whose fit fails still shows what was found. Throws Error.
+void RunValidate(const MeasureRequest& request, const DefinitionRegistry& registry, std::ostream& console);
+
 // A canonical text of every option that changes the outputs (not scan, not out_dir), with the software
 // version: for the batch's resume fingerprint. Deterministic: one "key = value" line per option, fixed order.
 std::string CanonicalOptionsText(const MeasureRequest& request);
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

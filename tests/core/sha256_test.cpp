@@ -5,7 +5,7 @@
 #include <string>
 
 #include "platemeter/core/error.h"
-#include "platemeter/measure/sha256.h"
+#include "platemeter/core/sha256.h"
 #include "support/test_support.h"
 
 namespace platemeter {

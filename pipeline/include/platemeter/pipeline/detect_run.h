@@ -1,6 +1,7 @@
 #pragma once
 // Running the detectors (reseau, fiducials, stars and trails, passpoints) on a scan into a measurement file
-// and a JSON summary: shared by `platemeter detect` and `platemeter measure`.
+// and a JSON summary: the detect step of the pipeline, run by `platemeter detect` and by RunMeasure
+// (measure_run.h), hence `platemeter measure`, `validate` and `batch`.
 #include <nlohmann/json.hpp>
 
 #include <optional>
@@ -10,7 +11,7 @@
 #include "platemeter/grids/registry.h"
 #include "platemeter/measure/measurement_file.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 
 // The duty-cycle program of a stellar plate (seed 001 Table 1; core/duty_cycle.h).
 struct TrailRequest {
@@ -56,4 +57,13 @@ struct DetectRun {
 // Throws Error naming the scan when nothing is found or the orientation is ambiguous.
 DetectRun RunDetection(const DetectRequest& request, const DefinitionRegistry& registry);
 
-}  // namespace platemeter::cli
+// The files `platemeter detect` writes (docs/detect.md).
+struct DetectFiles {
+  std::string measurements_csv;  // <stem>.measurements.csv
+  std::string summary_json;      // <stem>.detect.json
+};
+
+// Writes run's measurement file and JSON summary into out_dir (created), named by the scan's stem, each atomically.
+DetectFiles WriteDetectRun(const DetectRun& run, const std::string& scan, const std::string& out_dir);
+
+}  // namespace platemeter::pipeline

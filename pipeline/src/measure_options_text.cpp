@@ -4,11 +4,11 @@
 #include <cstdio>
 #include <sstream>
 
-#include "measure_run.h"
+#include "platemeter/core/sha256.h"
 #include "platemeter/core/version.h"
-#include "platemeter/measure/sha256.h"
+#include "platemeter/pipeline/measure_run.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 namespace {
 
 // Shortest text that reads back as the same double: deterministic across runs and platforms.
@@ -99,4 +99,4 @@ std::string CanonicalOptionsText(const MeasureRequest& request) {
   return out.str();
 }
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

@@ -9,7 +9,7 @@
 #include "platemeter/measure/fiducial_orientation.h"
 #include "platemeter/measure/plate_corrections.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 
 inline constexpr double kRadToArcsec = 206264.80624709636;
 
@@ -24,4 +24,4 @@ nlohmann::json FiducialJson(const FiducialOrientation& orientation);
 nlohmann::json DoubleMeasurementJson(const std::string& second_scan, const PlateCorrectionReport& second,
                                      bool with_reseau, const DoubleMeasurementReport& report, double tolerance_um);
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

@@ -1,4 +1,4 @@
-#include "platemeter/measure/sha256.h"
+#include "platemeter/core/sha256.h"
 
 #include <openssl/evp.h>
 

@@ -3,12 +3,12 @@
 // file read) and the correction options resolved from the request and the camera.
 #include <string>
 
-#include "measure_run.h"
 #include "platemeter/grids/registry.h"
 #include "platemeter/measure/measurement_file.h"
 #include "platemeter/measure/plate_corrections.h"
+#include "platemeter/pipeline/measure_run.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 
 struct PreparedMeasurement {
   MeasurementFile file;               // pixel columns filled
@@ -29,4 +29,4 @@ PreparedMeasurement PrepareMeasurement(const MeasureRequest& request, const Defi
 // The corrections: the reseau chain for reseau cameras, else the fiducial one.
 PlateCorrectionReport CorrectPrepared(PreparedMeasurement* prepared);
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

@@ -1,8 +1,8 @@
 // The `platemeter measure` flow as a function (measure_run.h): detect, correct,
 // write the measurement file, the JSON report, the residual plot and the MicMac
-// measures atomically, and say what was done. CanonicalOptionsText is in
-// measure_options_text.cpp.
-#include "measure_run.h"
+// measures atomically, and say what was done. RunValidate is in validate_run.cpp,
+// CanonicalOptionsText in measure_options_text.cpp.
+#include "platemeter/pipeline/measure_run.h"
 
 #include <nlohmann/json.hpp>
 
@@ -12,13 +12,13 @@
 
 #include "measure_prepare.h"
 #include "measure_report.h"
+#include "platemeter/core/atomic_file.h"
 #include "platemeter/core/error.h"
-#include "platemeter/measure/atomic_file.h"
 #include "platemeter/measure/double_measurement.h"
 #include "platemeter/measure/micmac_export.h"
 #include "platemeter/measure/residual_plot.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 namespace {
 
 // An error that does not name the scan yet gets it as its subject, so a batch log line says which scan failed.
@@ -180,4 +180,4 @@ MeasureSummary RunMeasure(const MeasureRequest& request, const DefinitionRegistr
   }
 }
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

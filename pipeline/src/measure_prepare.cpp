@@ -4,10 +4,10 @@
 #include <filesystem>
 
 #include "platemeter/core/error.h"
-#include "platemeter/detect/grid_assignment.h"
+#include "platemeter/core/scan_orientation.h"
 #include "platemeter/measure/fiducial_orientation.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 
 void CheckMeasureOptions(const MeasureRequest& request) {
   ReseauFitModel model;
@@ -22,7 +22,7 @@ void CheckMeasureOptions(const MeasureRequest& request) {
     ScanOrientation parsed;
     if (!orientation->empty() && !ParseScanOrientation(*orientation, &parsed)) {
       throw Error(orientation == &request.detect.orientation ? "--orientation" : "--second-orientation",
-                  "'" + *orientation + "' is not one of 0 90 180 270 0m 90m 180m 270m");
+                  "'" + *orientation + "' is not one of " + kScanOrientationNames);
     }
   }
   if (!(request.min_cross_fraction >= 0.0 && request.min_cross_fraction <= 1.0)) {
@@ -84,4 +84,4 @@ PlateCorrectionReport CorrectPrepared(PreparedMeasurement* p) {
   return p->grid ? CorrectPlate(&p->file, *p->grid, p->options) : CorrectFiducialPlate(&p->file, p->options);
 }
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

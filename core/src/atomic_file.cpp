@@ -1,4 +1,4 @@
-#include "platemeter/measure/atomic_file.h"
+#include "platemeter/core/atomic_file.h"
 
 #include <filesystem>
 #include <fstream>

@@ -8,7 +8,7 @@
 #include "platemeter/core/error.h"
 #include "platemeter/detect/passpoint_detector.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -134,4 +134,4 @@ StageOutput RunPasspointStage(const DetectContext& context) {
   return out;
 }
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

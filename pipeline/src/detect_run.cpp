@@ -1,6 +1,6 @@
-// Running the detectors into a measurement file (detect_run.h); the flow of
-// `platemeter detect`, shared with `platemeter measure`.
-#include "detect_run.h"
+// Running the detectors into a measurement file (detect_run.h): the detect step
+// of the pipeline, and what `platemeter detect` writes of it.
+#include "platemeter/pipeline/detect_run.h"
 
 #include "detect_stages.h"
 
@@ -8,14 +8,15 @@
 #include <optional>
 #include <utility>
 
+#include "platemeter/core/atomic_file.h"
 #include "platemeter/core/error.h"
 #include "platemeter/core/image.h"
+#include "platemeter/core/sha256.h"
 #include "platemeter/core/version.h"
 #include "platemeter/detect/fiducial_detector.h"
 #include "platemeter/detect/reseau_detector.h"
-#include "platemeter/measure/sha256.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 namespace {
 
 // What the two detectors found, for the outputs.
@@ -111,7 +112,7 @@ DetectRun RunDetection(const DetectRequest& request, const DefinitionRegistry& r
   if (!request.orientation.empty()) {
     ScanOrientation parsed;
     if (!ParseScanOrientation(request.orientation, &parsed)) {
-      throw Error("--orientation", "'" + request.orientation + "' is not one of 0 90 180 270 0m 90m 180m 270m");
+      throw Error("--orientation", "'" + request.orientation + "' is not one of " + kScanOrientationNames);
     }
     orientation = parsed;
   }
@@ -172,4 +173,15 @@ DetectRun RunDetection(const DetectRequest& request, const DefinitionRegistry& r
   return run;
 }
 
-}  // namespace platemeter::cli
+DetectFiles WriteDetectRun(const DetectRun& run, const std::string& scan, const std::string& out_dir) {
+  std::filesystem::create_directories(out_dir);
+  const std::string stem = std::filesystem::path(scan).stem().string();
+  DetectFiles files;
+  files.measurements_csv = (std::filesystem::path(out_dir) / (stem + ".measurements.csv")).string();
+  files.summary_json = (std::filesystem::path(out_dir) / (stem + ".detect.json")).string();
+  WriteMeasurementFile(files.measurements_csv, run.file);
+  WriteFileAtomically(files.summary_json, run.summary.dump(2) + "\n");
+  return files;
+}
+
+}  // namespace platemeter::pipeline

@@ -1,12 +1,13 @@
 #pragma once
 // Job definition files (docs/job.md): the options of `platemeter measure` for a
-// set of scans, in TOML; read by `detect --job`, `measure --job` and `batch`.
+// set of scans, in TOML; read by `detect --job`, `measure --job` and `batch`
+// (batch/measure_batch.h), with a manifest's per-scan overrides.
 #include <string>
 #include <vector>
 
-#include "measure_run.h"
+#include "platemeter/pipeline/measure_run.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 
 struct JobDefinition {
   MeasureRequest measure;  // scan and out_dir empty
@@ -24,4 +25,4 @@ void ApplyJobOverride(JobDefinition& job, const std::string& key, const std::str
 // The keys ApplyJobOverride accepts (for docs/errors).
 const std::vector<std::string>& JobOverrideKeys();
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

@@ -1,7 +1,7 @@
-// Job definition files (job.h, docs/job.md): every key has one setter, shared by
+// Job definition files (job_file.h, docs/job.md): every key has one setter, shared by
 // the TOML reader (typed values, errors with file and line) and the per-scan
 // overrides of a manifest (text values).
-#include "job.h"
+#include "platemeter/pipeline/job_file.h"
 
 #include <toml++/toml.h>
 
@@ -11,13 +11,13 @@
 #include <filesystem>
 #include <sstream>
 
-#include "platemeter/calib/apparent_place.h"
 #include "platemeter/core/duty_cycle.h"
 #include "platemeter/core/error.h"
-#include "platemeter/detect/grid_assignment.h"
+#include "platemeter/core/scan_orientation.h"
+#include "platemeter/core/utc_time.h"
 #include "platemeter/measure/reseau_fit.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 namespace {
 
 int LineOf(const toml::node& node) { return static_cast<int>(node.source().begin.line); }
@@ -115,7 +115,7 @@ class Value {
 std::string Orientation(const Value& v) {
   const std::string text = v.String();
   ScanOrientation parsed;
-  if (!text.empty() && !ParseScanOrientation(text, &parsed)) v.Fail("= '" + text + "' is not one of 0 90 180 270 0m 90m 180m 270m");
+  if (!text.empty() && !ParseScanOrientation(text, &parsed)) v.Fail("= '" + text + "' is not one of " + kScanOrientationNames);
   return text;
 }
 std::string Model(const Value& v, bool fiducial) {
@@ -169,7 +169,7 @@ const std::vector<KeySetter>& Setters() {
        [](JobDefinition& j, const Value& v) {
          const std::string text = v.String();
          try {
-           calib::ParseUtcIso8601(text);
+           ParseUtcIso8601(text);
          } catch (const Error& e) {
            v.Fail("= '" + text + "': " + e.reason());
          }
@@ -309,4 +309,4 @@ const std::vector<std::string>& JobOverrideKeys() {
   return keys;
 }
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

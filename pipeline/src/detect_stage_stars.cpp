@@ -8,13 +8,13 @@
 #include <sstream>
 
 #include "detect_stages.h"
-#include "platemeter/calib/apparent_place.h"
 #include "platemeter/core/error.h"
+#include "platemeter/core/utc_time.h"
 #include "platemeter/detect/star_detector.h"
 #include "platemeter/detect/trail_forced.h"
 #include "platemeter/detect/trail_linker.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 namespace {
 
 constexpr double kSiderealRate_rad_per_s = 7.2921150e-5;
@@ -76,7 +76,7 @@ MeasuredPoint StarRow(const DetectedStar& star) {
 // track_y_px with track_sigma_*_px, for the images the track was fitted to (track_fit, and bad ones).
 // An image off its track (bad) is rejected; one found along the plate's flow beyond the track's images
 // (flow_check) or measured at the track's prediction (forced_fit) has no track of its own here.
-MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const calib::UtcInstant& start_utc) {
+MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const UtcInstant& start_utc) {
   MeasuredPoint row = StarRow(star);
   const bool dot = t.kind == ExposureKind::kDot;
   row.kind = dot ? PointKind::kTrailDot : PointKind::kTrailDash;
@@ -84,7 +84,7 @@ MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const cali
   row.trail = "T" + std::to_string(t.trail);
   row.dot = dot ? t.dot_index : t.dash_index;
   row.id = row.star_id + "-" + row.trail + (dot ? "-D" : "-L") + std::to_string(*row.dot);
-  row.mid_time_utc = calib::FormatUtcIso8601(start_utc.PlusSeconds(t.mid_s), 3);
+  row.mid_time_utc = FormatUtcIso8601(start_utc.PlusSeconds(t.mid_s), 3);
   char value[64];
   std::snprintf(value, sizeof value, t.flow_checked ? "flow_residual_px=%.4f" : "track_residual_px=%.4f",
                 t.residual_px);
@@ -131,12 +131,12 @@ StageOutput RunStarStage(const DetectContext& context) {
       options.mask_arm_reach_px = options.mask_arm_half_width_px;
     }
   }
-  std::optional<calib::UtcInstant> start_utc;
+  std::optional<UtcInstant> start_utc;
   DutyCycleScheduleOptions schedule;
   TrailOptions trail_options;
   if (request.trails) {
     try {
-      start_utc = calib::ParseUtcIso8601(request.trails->start_utc);
+      start_utc = ParseUtcIso8601(request.trails->start_utc);
     } catch (const Error& e) {
       throw Error("--trails-start-utc", "'" + request.trails->start_utc + "' is not an ISO 8601 UTC time");
     }
@@ -229,4 +229,4 @@ StageOutput RunStarStage(const DetectContext& context) {
   return out;
 }
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 namespace {
 
 nlohmann::json Vs(const ValueSigma& v) { return {{"value", v.value}, {"sigma", v.sigma}}; }
@@ -99,4 +99,4 @@ nlohmann::json DoubleMeasurementJson(const std::string& second_scan, const Plate
   return d;
 }
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

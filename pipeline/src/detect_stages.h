@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "detect_run.h"
+#include "platemeter/pipeline/detect_run.h"
 #include "platemeter/core/image.h"
 #include "platemeter/detect/fiducial_detector.h"
 #include "platemeter/detect/grid_assignment.h"
@@ -17,7 +17,7 @@
 #include "platemeter/grids/registry.h"
 #include "platemeter/measure/measurement_file.h"
 
-namespace platemeter::cli {
+namespace platemeter::pipeline {
 
 // What the earlier stages know; pointers are null when that stage did not run.
 struct DetectContext {
@@ -43,4 +43,4 @@ StageOutput RunStarStage(const DetectContext& context);
 // Passpoints (kind passpoint) as request.passpoints defines them.
 StageOutput RunPasspointStage(const DetectContext& context);
 
-}  // namespace platemeter::cli
+}  // namespace platemeter::pipeline

@@ -35,20 +35,29 @@ MarkCramerRao CramerRaoBound(const MarkModel& model, const SceneNoise& noise, co
   const double variance = PixelNoiseVariance(noise);
   const double amplitude = model.mark().amplitude_dn;
   if (window.empty() || !(variance > 0.0) || amplitude == 0.0) return result;
-  const PixelPoint c = model.mark().centre_px;
   const double h = options.step_px;
   Eigen::Matrix4d fisher = Eigen::Matrix4d::Zero();
+  // Outside the support (which has a pixel of slack for the shifts, h < 0.5 px)
+  // the mark gives 0 at every shifted centre: such a pixel only informs the
+  // background, j = (0, 0, 0, 1). Counted, not evaluated five times.
+  const PixelRect& support = model.support();
+  long background_only = 0;
   for (long y = window.y0_px; y < window.y_end_px(); ++y)
     for (long x = window.x0_px; x < window.x_end_px(); ++x) {
+      if (x < support.x0_px || x >= support.x_end_px() || y < support.y0_px || y >= support.y_end_px()) {
+        ++background_only;
+        continue;
+      }
+      double v[5];  // at the centre, then moved +x, -x, +y, -y
+      model.PixelValuesShifted(h, x, y, v);
       Eigen::Vector4d j;
-      j[0] = (model.PixelValueWithCentre({c.x_px + h, c.y_px}, x, y) -
-              model.PixelValueWithCentre({c.x_px - h, c.y_px}, x, y)) / (2 * h);
-      j[1] = (model.PixelValueWithCentre({c.x_px, c.y_px + h}, x, y) -
-              model.PixelValueWithCentre({c.x_px, c.y_px - h}, x, y)) / (2 * h);
-      j[2] = model.PixelValue(x, y) / amplitude;
+      j[0] = (v[1] - v[2]) / (2 * h);
+      j[1] = (v[3] - v[4]) / (2 * h);
+      j[2] = v[0] / amplitude;
       j[3] = 1.0;
       fisher.noalias() += j * j.transpose();
     }
+  fisher(3, 3) += static_cast<double>(background_only);
   fisher /= variance;
   result.window_pixels = window.width_px * window.height_px;
   // Scale to unit diagonal before inverting: the entries span many decades.

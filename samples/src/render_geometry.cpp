@@ -52,6 +52,31 @@ const GaussLegendreRule& GaussLegendre(int n) {
   return rules.emplace(n, std::move(rule)).first->second;
 }
 
+NormalCdfTable::NormalCdfTable() {
+  constexpr double kInvSqrt2Pi = 0.39894228040143267794;
+  for (int i = 0; i < kIntervals; ++i) {
+    const double z0 = -kLimit + (i + 0.5) / kPerUnit;
+    const double pdf = kInvSqrt2Pi * std::exp(-0.5 * z0 * z0);
+    double* c = coefficients[i];
+    c[0] = 0.5 * std::erfc(-z0 * 0.70710678118654752440);
+    // Phi^(k)(z0) / k! = (-1)^(k-1) He_{k-1}(z0) phi(z0) / k!, He the probabilists' Hermite polynomials.
+    double he[kDegree];
+    he[0] = 1.0;
+    he[1] = z0;
+    for (int n = 1; n + 1 < kDegree; ++n) he[n + 1] = z0 * he[n] - n * he[n - 1];
+    double factorial = 1.0;
+    for (int k = 1; k <= kDegree; ++k) {
+      factorial *= k;
+      c[k] = (k % 2 == 1 ? 1.0 : -1.0) * he[k - 1] * pdf / factorial;
+    }
+  }
+}
+
+const NormalCdfTable& TheNormalCdfTable() {
+  static const NormalCdfTable table;
+  return table;
+}
+
 namespace {
 
 double Cross(Point2 a, Point2 b) { return a.x * b.y - a.y * b.x; }

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <memory>
+#include <mutex>
 
 #include <fmt/format.h>
 
@@ -12,7 +15,7 @@
 namespace platemeter::sim {
 
 using render_detail::GaussLegendre;
-using render_detail::NormalCdfDifference;
+using render_detail::FastNormalCdf;
 using render_detail::Point2;
 
 bool RenderOptions::Check(std::string* why) const {
@@ -42,11 +45,23 @@ struct Bounds {  // continuous extent in px relative to the mark centre
 
 // Quadrature nodes over one pixel: offsets (px) from the pixel centre and
 // weights summing to 1, k x k sub-cells of n x n Gauss-Legendre nodes.
+// The rule is the tensor product of a 1-D rule (axis, axis_w: k n offsets and
+// weights summing to 1), which lets a Gaussian's exponential factor per axis.
 struct PixelNodes {
   std::vector<double> dx, dy, w;
+  std::vector<double> axis, axis_w;
   PixelNodes(int cells, int n) {
     const auto& rule = GaussLegendre(n);
     const double h = 1.0 / cells;
+    for (int c = 0; c < cells; ++c)
+      for (int i = 0; i < n; ++i) {
+        axis.push_back(-0.5 + (c + 0.5) * h + 0.5 * h * rule.nodes[i]);
+        axis_w.push_back(0.5 * h * rule.weights[i]);
+      }
+    // Exactly antisymmetric (the split form then needs half the exponentials).
+    const size_t m = axis.size();
+    for (size_t i = 0; i < m / 2; ++i) axis[m - 1 - i] = -axis[i], axis_w[m - 1 - i] = axis_w[i];
+    if (m % 2 == 1) axis[m / 2] = 0.0;
     for (int cy = 0; cy < cells; ++cy)
       for (int cx = 0; cx < cells; ++cx)
         for (int j = 0; j < n; ++j)
@@ -63,7 +78,18 @@ struct PixelNodes {
 // two higher-order ones with proportionally larger cells, (n + 2, 2 r) and
 // (n + 4, 3 r), are about equally accurate (Gauss-Legendre converges faster
 // with more nodes); the cheapest wins, which matters for sharp blurs.
-PixelNodes NodesFor(double sigma_px, const RenderOptions& options) {
+// Rules are shared (a plate has tens of thousands of trail images, most with
+// the same rule): built once per (cells, nodes), kept for the process.
+std::shared_ptr<const PixelNodes> SharedNodes(int cells, int nodes) {
+  static std::mutex mutex;
+  static std::map<std::pair<int, int>, std::shared_ptr<const PixelNodes>> rules;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& rule = rules[{cells, nodes}];
+  if (!rule) rule = std::make_shared<const PixelNodes>(cells, nodes);
+  return rule;
+}
+
+std::shared_ptr<const PixelNodes> NodesFor(double sigma_px, const RenderOptions& options) {
   int best_cells = 0, best_nodes = 0;
   long best_cost = -1;
   for (int order = 0; order < 3; ++order) {
@@ -74,7 +100,7 @@ PixelNodes NodesFor(double sigma_px, const RenderOptions& options) {
     const long cost = static_cast<long>(cells) * cells * nodes * nodes;
     if (best_cost < 0 || cost < best_cost) best_cost = cost, best_cells = cells, best_nodes = nodes;
   }
-  return PixelNodes(best_cells, best_nodes);
+  return SharedNodes(best_cells, best_nodes);
 }
 
 // An axis-aligned rectangle [-half0, half0] x [-half1, half1] in its own frame
@@ -117,13 +143,16 @@ struct RectPart {
         return weight * render_detail::BoxAveragedInterval(q0, half[0], sigma[0], m[0], m[1]) *
                render_detail::BoxAveragedInterval(q1, half[1], sigma[1], m[2], m[3]);
     }
+    const render_detail::NormalCdfTable& cdf = render_detail::TheNormalCdfTable();
     const double inv0 = 1.0 / sigma[0], inv1 = 1.0 / sigma[1];
     double sum = 0.0;
     const size_t n = node_w.size();
     for (size_t k = 0; k < n; ++k) {
       const double u = q0 + node_q0[k], v = q1 + node_q1[k];
-      const double f0 = in0 ? 1.0 : NormalCdfDifference((half[0] - u) * inv0, (-half[0] - u) * inv0);
-      const double f1 = in1 ? 1.0 : NormalCdfDifference((half[1] - v) * inv1, (-half[1] - v) * inv1);
+      const double f0 =
+          in0 ? 1.0 : FastNormalCdf(cdf, (half[0] - u) * inv0) - FastNormalCdf(cdf, (-half[0] - u) * inv0);
+      const double f1 =
+          in1 ? 1.0 : FastNormalCdf(cdf, (half[1] - v) * inv1) - FastNormalCdf(cdf, (-half[1] - v) * inv1);
       sum += node_w[k] * f0 * f1;
     }
     return weight * sum;
@@ -175,7 +204,21 @@ struct DiskPart {
 
 // A Gaussian PSF (covariance c in px^2, unit flux), optionally swept uniformly
 // along the segment from -half_segment to +half_segment (px).
+//
+// Swept: with e the unit direction, f = (-e1, e0) across it, a = e^T P e, the
+// density at d is norm sqrt(2 pi / a) / L exp(-kappa (f.d)^2 / 2)
+// [Phi(sa (L/2 - g.d)) - Phi(sa (-L/2 - g.d))], kappa = det P / a, sa = sqrt a,
+// g = e + (f^T P e / a) f (g.d: where along the segment the point projects in
+// the PSF's metric). Over the tensor rule's nodes (X_i, Y_j) the across factor
+// splits into exp(-kappa u_c f0 X_i) exp(-kappa u_c f1 Y_j) and a per-mark table
+// of exp(-kappa (f0 X_i + f1 Y_j)^2 / 2) (u_c = f.d at the pixel centre), so a
+// pixel costs k n exponentials (the axis is antisymmetric) instead of (k n)^2;
+// the CDFs come from the Taylor table (FastNormalCdf). A point PSF splits the
+// same way.
 struct GaussPart {
+  static constexpr size_t kMaxTensorNodes = 64;   // per axis; larger rules go node by node
+  static constexpr double kMaxSplitExponent = 300.0;  // larger factors could overflow: node by node
+
   double c[3];  // xx, xy, yy
   double p[3];  // inverse covariance
   double norm = 0.0;
@@ -190,24 +233,172 @@ struct GaussPart {
   bool isotropic = false;          // C = s^2 I
   bool closed_form = true;
   double tail = 8.5;
-  std::vector<double> node_x, node_y, node_w;
+  std::shared_ptr<const PixelNodes> nodes;  // the pixel rule (node by node when the split form cannot serve)
+  // Split form (see above).
+  double f[2] = {0.0, 1.0};     // across unit vector
+  double g[2] = {1.0, 0.0};     // t = g.d
+  double kappa = 0.0;           // 1/px^2: det P / a
+  double sa = 0.0;              // 1/px: sqrt(a)
+  double swept_norm = 0.0;      // norm sqrt(2 pi / a) / L
+  bool split = false;           // use the split form
+  double split_reach = 0.0;     // px: max |f.n| (swept) or max |n_x| = max |n_y| (point) over the nodes
+  std::vector<double> axis;       // 1-D node offsets (px)
+  std::vector<double> axis_u[2];  // swept: f0 X_i, f1 Y_j
+  std::vector<double> axis_t[2];  // swept: sa g0 X_i, sa g1 Y_j
+  double t_min = 0.0, t_max = 0.0;  // extremes of axis_t[0]
+  std::vector<double> pair_w;     // [j * m + i]: W_i W_j times the node-only exponential factor
 
-  double Density(double x, double y) const {
+  void PrepareSplit(const PixelNodes& nodes) {
+    const size_t m = nodes.axis.size();
+    if (m > kMaxTensorNodes) return;
+    axis = nodes.axis;
+    split_reach = 0.0;
+    pair_w.resize(m * m);
+    if (length > 0.0) {
+      f[0] = -e[1], f[1] = e[0];
+      const double det_p = p[0] * p[2] - p[1] * p[1];
+      kappa = det_p / along_a;
+      sa = std::sqrt(along_a);
+      const double pfe = f[0] * (p[0] * e[0] + p[1] * e[1]) + f[1] * (p[1] * e[0] + p[2] * e[1]);
+      g[0] = e[0] + pfe / along_a * f[0];
+      g[1] = e[1] + pfe / along_a * f[1];
+      swept_norm = norm * std::sqrt(2.0 * M_PI / along_a) / length;
+      for (int k = 0; k < 2; ++k) {
+        axis_u[k].resize(m);
+        axis_t[k].resize(m);
+        for (size_t i = 0; i < m; ++i) {
+          axis_u[k][i] = f[k] * axis[i];
+          axis_t[k][i] = sa * g[k] * axis[i];
+        }
+      }
+      t_min = *std::min_element(axis_t[0].begin(), axis_t[0].end());
+      t_max = *std::max_element(axis_t[0].begin(), axis_t[0].end());
+      for (size_t j = 0; j < m; ++j)
+        for (size_t i = 0; i < m; ++i) {
+          const double u = axis_u[0][i] + axis_u[1][j];
+          pair_w[j * m + i] = nodes.axis_w[i] * nodes.axis_w[j] * std::exp(-0.5 * kappa * u * u);
+          split_reach = std::max(split_reach, std::abs(u));
+        }
+    } else {
+      for (size_t j = 0; j < m; ++j)
+        for (size_t i = 0; i < m; ++i) {
+          const double x = axis[i], y = axis[j];
+          const double q = p[0] * x * x + 2 * p[1] * x * y + p[2] * y * y;
+          pair_w[j * m + i] = nodes.axis_w[i] * nodes.axis_w[j] * std::exp(-0.5 * q);
+        }
+      for (double x : axis) split_reach = std::max(split_reach, std::abs(x));
+    }
+    split = true;
+  }
+
+  double Density(double x, double y, const render_detail::NormalCdfTable& cdf) const {
     const double q = p[0] * x * x + 2 * p[1] * x * y + p[2] * y * y;
     if (length == 0.0) return norm * std::exp(-0.5 * q);
     const double b = e[0] * (p[0] * x + p[1] * y) + e[1] * (p[1] * x + p[2] * y);
     const double across = q - b * b / along_a;
-    const double sa = std::sqrt(along_a);
+    const double sa_local = std::sqrt(along_a);
     const double t0 = b / along_a;
     return norm * std::exp(-0.5 * across) * std::sqrt(2.0 * M_PI / along_a) / length *
-           NormalCdfDifference(sa * (0.5 * length - t0), sa * (-0.5 * length - t0));
+           (FastNormalCdf(cdf, sa_local * (0.5 * length - t0)) - FastNormalCdf(cdf, sa_local * (-0.5 * length - t0)));
   }
 
-  double Value(double dx, double dy) const {
+  // One row of nodes: sum over i of w_i ex_i [Phi(hi - tx_i) - Phi(lo - tx_i)].
+  // Where a whole row lies beyond the table (Phi 1 at the far end, 0 before the
+  // near one) that CDF is skipped: pixels off a trail's ends often need one.
+  double SweptRow(const render_detail::NormalCdfTable& cdf, const double* w, const double* ex, double hi,
+                  double lo) const {
+    const size_t m = axis.size();
+    const double* tx = axis_t[0].data();
+    constexpr double kLimit = render_detail::NormalCdfTable::kLimit;
+    const bool hi_is_one = hi - t_max >= kLimit, lo_is_zero = lo - t_min <= -kLimit;
+    double row = 0.0;
+    if (hi_is_one && lo_is_zero) {
+      for (size_t i = 0; i < m; ++i) row += w[i] * ex[i];
+    } else if (hi_is_one) {
+      for (size_t i = 0; i < m; ++i) row += w[i] * ex[i] * (1.0 - FastNormalCdf(cdf, lo - tx[i]));
+    } else if (lo_is_zero) {
+      for (size_t i = 0; i < m; ++i) row += w[i] * ex[i] * FastNormalCdf(cdf, hi - tx[i]);
+    } else {
+      for (size_t i = 0; i < m; ++i)
+        row += w[i] * ex[i] * (FastNormalCdf(cdf, hi - tx[i]) - FastNormalCdf(cdf, lo - tx[i]));
+    }
+    return row;
+  }
+
+  // The per-pixel factors of the split swept form at d: the CDF arguments at the
+  // node grid's origin, the across factors per axis, and the pixel's scale.
+  struct SweptPixel {
+    double hi = 0.0, lo = 0.0;  // sa (+-L/2 - g.d)
+    double scale = 0.0;         // swept_norm exp(-kappa u_c^2 / 2)
+    double ex[kMaxTensorNodes], ey[kMaxTensorNodes];
+  };
+
+  // False when a factor could overflow (a Gaussian much narrower than the pixel).
+  bool PrepareSwept(double dx, double dy, SweptPixel* pixel) const {
+    const size_t m = axis.size();
+    const double u_c = f[0] * dx + f[1] * dy;
+    const double slope = kappa * u_c;
+    const double half_exponent = 0.5 * slope * u_c;
+    if (half_exponent + std::abs(slope) * split_reach > kMaxSplitExponent) return false;
+    // The axis is antisymmetric: exp(-s a_(m-1-i)) = 1 / exp(-s a_i).
+    for (size_t i = 0; i < (m + 1) / 2; ++i) {
+      pixel->ex[i] = std::exp(-slope * axis_u[0][i]);
+      pixel->ey[i] = std::exp(-slope * axis_u[1][i]);
+    }
+    for (size_t i = (m + 1) / 2; i < m; ++i) {
+      pixel->ex[i] = 1.0 / pixel->ex[m - 1 - i];
+      pixel->ey[i] = 1.0 / pixel->ey[m - 1 - i];
+    }
+    const double t_c = g[0] * dx + g[1] * dy;
+    pixel->hi = sa * (0.5 * length - t_c);
+    pixel->lo = sa * (-0.5 * length - t_c);
+    pixel->scale = swept_norm * std::exp(-half_exponent);
+    return true;
+  }
+
+  // The pixel mean by the split form; false when a factor could overflow.
+  bool SplitValue(double dx, double dy, const render_detail::NormalCdfTable& cdf, double* value) const {
+    const size_t m = axis.size();
+    if (length > 0.0) {
+      SweptPixel pixel;
+      if (!PrepareSwept(dx, dy, &pixel)) return false;
+      double sum = 0.0;
+      for (size_t j = 0; j < m; ++j)
+        sum += pixel.ey[j] *
+               SweptRow(cdf, pair_w.data() + j * m, pixel.ex, pixel.hi - axis_t[1][j], pixel.lo - axis_t[1][j]);
+      *value = pixel.scale * sum;
+      return true;
+    }
+    double ex[kMaxTensorNodes], ey[kMaxTensorNodes];
+    const double r0 = p[0] * dx + p[1] * dy, r1 = p[1] * dx + p[2] * dy;  // P d
+    const double half_exponent = 0.5 * (dx * r0 + dy * r1);
+    if (half_exponent + (std::abs(r0) + std::abs(r1)) * split_reach > kMaxSplitExponent) return false;
+    for (size_t i = 0; i < m; ++i) {
+      ex[i] = std::exp(-r0 * axis[i]);
+      ey[i] = std::exp(-r1 * axis[i]);
+    }
+    double sum = 0.0;
+    for (size_t j = 0; j < m; ++j) {
+      const double* w = pair_w.data() + j * m;
+      double row = 0.0;
+      for (size_t i = 0; i < m; ++i) row += w[i] * ex[i];
+      sum += ey[j] * row;
+    }
+    *value = norm * std::exp(-half_exponent) * sum;
+    return true;
+  }
+
+  // The value where no quadrature is needed: a diagonal point PSF (closed form),
+  // an isotropic trail's middle (closed form), or beyond the reach (0).
+  bool Shortcut(double dx, double dy, const render_detail::NormalCdfTable& cdf, double* value) const {
     if (length == 0.0 && diagonal) {  // exact: product of erf differences
-      if (std::abs(dx) >= tail * sx + 0.5 || std::abs(dy) >= tail * sy + 0.5) return 0.0;
-      return NormalCdfDifference((dx + 0.5) / sx, (dx - 0.5) / sx) *
-             NormalCdfDifference((dy + 0.5) / sy, (dy - 0.5) / sy);
+      if (std::abs(dx) >= tail * sx + 0.5 || std::abs(dy) >= tail * sy + 0.5) {
+        *value = 0.0;
+      } else {
+        *value = (FastNormalCdf(cdf, (dx + 0.5) / sx) - FastNormalCdf(cdf, (dx - 0.5) / sx)) *
+                 (FastNormalCdf(cdf, (dy + 0.5) / sy) - FastNormalCdf(cdf, (dy - 0.5) / sy));
+      }
+      return true;
     }
     // Isotropic PSF away from the segment's ends: Gaussian across times 1 along,
     // the pixel mean in closed form.
@@ -215,22 +406,148 @@ struct GaussPart {
       const double along = e[0] * dx + e[1] * dy;
       if (std::abs(along) + 0.5 * (std::abs(e[0]) + std::abs(e[1])) + tail * sx <= 0.5 * length) {
         const double across = -e[1] * dx + e[0] * dy;
-        return render_detail::BoxAveragedDensity(across, sx, -e[1], e[0]) / length;
+        *value = render_detail::BoxAveragedDensity(across, sx, -e[1], e[0]) / length;
+        return true;
       }
     }
     // Mahalanobis distance of the pixel centre to the segment's line.
     const double q = p[0] * dx * dx + 2 * p[1] * dx * dy + p[2] * dy * dy;
     double across = q;
+    *value = 0.0;
     if (length > 0.0) {
       const double b = e[0] * (p[0] * dx + p[1] * dy) + e[1] * (p[1] * dx + p[2] * dy);
       across = q - b * b / along_a;
       // Beyond the segment's ends by more than the tail (over the whole pixel): nothing.
-      if (std::sqrt(along_a) * (std::abs(b / along_a) - 0.5 * length - along_pixel_reach) >= tail) return 0.0;
+      if (std::sqrt(along_a) * (std::abs(b / along_a) - 0.5 * length - along_pixel_reach) >= tail) return true;
     }
-    if (across >= reach_sq) return 0.0;
+    return across >= reach_sq;
+  }
+
+  double Quadrature(double dx, double dy, const render_detail::NormalCdfTable& cdf) const {
+    double value;
+    if (split && SplitValue(dx, dy, cdf, &value)) return value;
     double sum = 0.0;
-    for (size_t k = 0; k < node_w.size(); ++k) sum += node_w[k] * Density(dx + node_x[k], dy + node_y[k]);
+    const PixelNodes& rule = *nodes;
+    for (size_t k = 0; k < rule.w.size(); ++k) sum += rule.w[k] * Density(dx + rule.dx[k], dy + rule.dy[k], cdf);
     return sum;
+  }
+
+  double Value(double dx, double dy) const {
+    const render_detail::NormalCdfTable& cdf = render_detail::TheNormalCdfTable();
+    double value;
+    if (Shortcut(dx, dy, cdf, &value)) return value;
+    return Quadrature(dx, dy, cdf);
+  }
+
+  // Adds Value(dx[k], dy[k]) to out[k] for count <= kLanes pixel offsets, each
+  // within shift_px of the first along x or y (the Cramer-Rao bound's centre
+  // and its four shifts). Swept marks evaluate them together (SweptLanes).
+  void AddValues(const double* dx, const double* dy, int count, double shift_px, double* out) const {
+    const render_detail::NormalCdfTable& cdf = render_detail::TheNormalCdfTable();
+    if (count > kLanes) {
+      for (int k = 0; k < count; ++k) out[k] += Value(dx[k], dy[k]);
+      return;
+    }
+    int pending[kLanes], n_pending = 0;
+    for (int k = 0; k < count; ++k) {
+      double value;
+      if (Shortcut(dx[k], dy[k], cdf, &value)) out[k] += value;
+      else pending[n_pending++] = k;
+    }
+    // A node's CDF arguments span at most 2 sa |g| shift_px over the offsets:
+    // at most one table interval, so the interval of their midpoint serves all.
+    const double max_arg_shift = sa * std::max(std::abs(g[0]), std::abs(g[1])) * shift_px;
+    const bool together = split && length > 0.0 && n_pending > 1 &&
+                          max_arg_shift <= 0.5 / render_detail::NormalCdfTable::kPerUnit;
+    if (!together) {
+      for (int r = 0; r < n_pending; ++r) out[pending[r]] += Quadrature(dx[pending[r]], dy[pending[r]], cdf);
+      return;
+    }
+    SweptLanes lanes;
+    int ready[kLanes], n_ready = 0;
+    for (int r = 0; r < n_pending; ++r) {
+      const int k = pending[r];
+      SweptPixel pixel;
+      if (PrepareSwept(dx[k], dy[k], &pixel)) lanes.Set(n_ready, pixel, axis.size()), ready[n_ready++] = k;
+      else out[k] += Quadrature(dx[k], dy[k], cdf);
+    }
+    if (n_ready == 0) return;
+    for (int r = n_ready; r < kLanes; ++r) lanes.Copy(r, 0, axis.size());  // idle lanes repeat the first
+    Vec2 sums[kVectors];
+    SweptLanesSum(cdf, lanes, sums);
+    for (int r = 0; r < n_ready; ++r) out[ready[r]] += lanes.scale[r] * sums[r / 2][r % 2];
+  }
+
+  // Several pixels of the split swept form side by side, two per SIMD vector
+  // (GCC/Clang vector extension: SSE2 on x86-64, NEON on arm64, scalar elsewhere).
+  using Vec2 = double __attribute__((vector_size(16)));
+  static constexpr int kVectors = 3, kLanes = 2 * kVectors;
+  struct SweptLanes {
+    double scale[kLanes];
+    Vec2 hi[kVectors], lo[kVectors];
+    Vec2 ex[kMaxTensorNodes][kVectors], ey[kMaxTensorNodes][kVectors];
+    void Set(int r, const SweptPixel& pixel, size_t m) {
+      scale[r] = pixel.scale;
+      hi[r / 2][r % 2] = pixel.hi, lo[r / 2][r % 2] = pixel.lo;
+      for (size_t i = 0; i < m; ++i) ex[i][r / 2][r % 2] = pixel.ex[i], ey[i][r / 2][r % 2] = pixel.ey[i];
+    }
+    void Copy(int r, int from, size_t m) {
+      scale[r] = scale[from];
+      hi[r / 2][r % 2] = hi[from / 2][from % 2], lo[r / 2][r % 2] = lo[from / 2][from % 2];
+      for (size_t i = 0; i < m; ++i) {
+        ex[i][r / 2][r % 2] = ex[i][from / 2][from % 2];
+        ey[i][r / 2][r % 2] = ey[i][from / 2][from % 2];
+      }
+    }
+  };
+
+  // Phi(z[v]) for the lanes, from the table interval of base; the lanes lie
+  // within half an interval of base (a polynomial holds to 3e-16 up to twice
+  // its half width from its centre). Beyond the table's ends all are 0 or 1.
+  static void CdfLanes(const render_detail::NormalCdfTable& cdf, double base, const Vec2* z, Vec2* phi) {
+    using Table = render_detail::NormalCdfTable;
+    constexpr double kEdge = Table::kLimit + 0.5 / Table::kPerUnit;
+    if (base >= kEdge || base <= -kEdge) {
+      const double value = base > 0.0 ? 1.0 : 0.0;
+      for (int v = 0; v < kVectors; ++v) phi[v] = Vec2{value, value};
+      return;
+    }
+    const double clamped = std::max(-Table::kLimit, std::min(base, Table::kLimit));
+    const int i = std::min(static_cast<int>((clamped + Table::kLimit) * Table::kPerUnit), Table::kIntervals - 1);
+    const double centre = (i + 0.5) * (1.0 / Table::kPerUnit) - Table::kLimit;
+    const double* c = cdf.coefficients[i];
+    for (int v = 0; v < kVectors; ++v) {
+      const Vec2 t = z[v] - centre, t2 = t * t, t4 = t2 * t2;
+      phi[v] = ((c[0] + t * c[1]) + t2 * (c[2] + t * c[3])) + t4 * ((c[4] + t * c[5]) + t2 * (c[6] + t * c[7]));
+    }
+  }
+
+  // sums = the node sums of the split form for every lane.
+  void SweptLanesSum(const render_detail::NormalCdfTable& cdf, const SweptLanes& lanes, Vec2* sums) const {
+    const size_t m = axis.size();
+    const double* tx = axis_t[0].data();
+    // Midpoints of the lanes' arguments (the table interval is found from them).
+    double hi_min = lanes.hi[0][0], hi_max = hi_min, lo_min = lanes.lo[0][0], lo_max = lo_min;
+    for (int r = 1; r < kLanes; ++r) {
+      hi_min = std::min(hi_min, lanes.hi[r / 2][r % 2]), hi_max = std::max(hi_max, lanes.hi[r / 2][r % 2]);
+      lo_min = std::min(lo_min, lanes.lo[r / 2][r % 2]), lo_max = std::max(lo_max, lanes.lo[r / 2][r % 2]);
+    }
+    const double hi_mid = 0.5 * (hi_min + hi_max), lo_mid = 0.5 * (lo_min + lo_max);
+    for (int v = 0; v < kVectors; ++v) sums[v] = Vec2{0.0, 0.0};
+    for (size_t j = 0; j < m; ++j) {
+      const double* w = pair_w.data() + j * m;
+      const double ty = axis_t[1][j];
+      Vec2 rows[kVectors] = {};
+      for (size_t i = 0; i < m; ++i) {
+        const double shift = ty + tx[i];
+        Vec2 z_hi[kVectors], z_lo[kVectors], phi_hi[kVectors], phi_lo[kVectors];
+        for (int v = 0; v < kVectors; ++v) z_hi[v] = (lanes.hi[v] - ty) - tx[i], z_lo[v] = (lanes.lo[v] - ty) - tx[i];
+        CdfLanes(cdf, hi_mid - shift, z_hi, phi_hi);
+        CdfLanes(cdf, lo_mid - shift, z_lo, phi_lo);
+        for (int v = 0; v < kVectors; ++v) rows[v] += w[i] * lanes.ex[i][v] * (phi_hi[v] - phi_lo[v]);
+      }
+      for (int v = 0; v < kVectors; ++v) sums[v] += lanes.ey[j][v] * rows[v];
+    }
   }
 };
 
@@ -250,6 +567,17 @@ struct MarkModel::Impl {
     for (const auto& part : disks) sum += part.Value(dx, dy);
     for (const auto& part : gausses) sum += part.Value(dx, dy);
     return scale * sum;
+  }
+
+  // Value at five offsets within shift_px of each other, in the same order of parts.
+  void Values5(const double dx[5], const double dy[5], double shift_px, double out[5]) const {
+    for (int k = 0; k < 5; ++k) out[k] = 0.0;
+    for (const auto& part : rects)
+      for (int k = 0; k < 5; ++k) out[k] += part.Value(dx[k], dy[k]);
+    for (const auto& part : disks)
+      for (int k = 0; k < 5; ++k) out[k] += part.Value(dx[k], dy[k]);
+    for (const auto& part : gausses) part.AddValues(dx, dy, 5, shift_px, out);
+    for (int k = 0; k < 5; ++k) out[k] *= scale;
   }
 };
 
@@ -304,7 +632,7 @@ void AddRect(MarkModel::Impl* impl, const Frame& frame, double cu, double cv, do
   part.separable = (std::abs(part.m[1]) <= tiny && std::abs(part.m[2]) <= tiny) ||
                    (std::abs(part.m[0]) <= tiny && std::abs(part.m[3]) <= tiny);
   if (blur_px > 0.0) {
-    PixelNodes nodes = NodesFor(blur_px, options);
+    const PixelNodes& nodes = *NodesFor(blur_px, options);
     for (size_t k = 0; k < nodes.w.size(); ++k) {
       part.node_q0.push_back(part.m[0] * nodes.dx[k] + part.m[1] * nodes.dy[k]);
       part.node_q1.push_back(part.m[2] * nodes.dx[k] + part.m[3] * nodes.dy[k]);
@@ -350,7 +678,7 @@ void AddDisk(MarkModel::Impl* impl, const Frame& frame, double radius_um, double
     for (int i = 0; i < count; ++i)
       render_detail::BlurredDisk(part.r_lo + i * part.step, radius_um, part.sigma, &part.f[i], &part.df[i]);
     const double sigma_px = part.sigma / um_per_px;
-    PixelNodes nodes = NodesFor(sigma_px, options);
+    const PixelNodes& nodes = *NodesFor(sigma_px, options);
     for (size_t k = 0; k < nodes.w.size(); ++k) {
       part.node_u.push_back(part.m[0] * nodes.dx[k] + part.m[1] * nodes.dy[k]);
       part.node_v.push_back(part.m[2] * nodes.dx[k] + part.m[3] * nodes.dy[k]);
@@ -409,10 +737,8 @@ void AddGauss(MarkModel::Impl* impl, const Frame& frame, const SceneMark& mark, 
   const double reach = options.tail_sigmas + std::sqrt(0.5) / std::sqrt(lambda_min);
   part.reach_sq = reach * reach;
   if (!(part.length == 0.0 && part.diagonal)) {
-    PixelNodes nodes = NodesFor(std::sqrt(lambda_min), options);
-    part.node_x = nodes.dx;
-    part.node_y = nodes.dy;
-    part.node_w = nodes.w;
+    part.nodes = NodesFor(std::sqrt(lambda_min), options);
+    part.PrepareSplit(*part.nodes);
   }
   const double ex = options.tail_sigmas * part.sx + std::abs(part.seg[0]);
   const double ey = options.tail_sigmas * part.sy + std::abs(part.seg[1]);
@@ -538,6 +864,15 @@ MarkModel::MarkModel(const SceneMark& mark, double scanner_blur_sigma_px, const 
 }
 
 const SceneMark& MarkModel::mark() const { return impl_->mark; }
+
+void MarkModel::PixelValuesShifted(double step_px, long x_px, long y_px, double values[5]) const {
+  const PixelPoint c = centre_px_;
+  const double x = static_cast<double>(x_px), y = static_cast<double>(y_px);
+  // The offsets exactly as PixelValueWithCentre forms them for each moved centre.
+  const double dx[5] = {x - c.x_px, x - (c.x_px + step_px), x - (c.x_px - step_px), x - c.x_px, x - c.x_px};
+  const double dy[5] = {y - c.y_px, y - c.y_px, y - c.y_px, y - (c.y_px + step_px), y - (c.y_px - step_px)};
+  impl_->Values5(dx, dy, std::abs(step_px), values);
+}
 
 double MarkModel::PixelValueWithCentre(PixelPoint centre_px, long x_px, long y_px) const {
   return impl_->Value(static_cast<double>(x_px) - centre_px.x_px, static_cast<double>(y_px) - centre_px.y_px);

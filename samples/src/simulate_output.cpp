@@ -1,13 +1,14 @@
 // Writing a simulated plate: the scan band by band, the truth file and the chain file.
 #include <chrono>
 #include <filesystem>
+#include <future>
 #include <nlohmann/json.hpp>
 #include <vector>
 
 #include "platemeter/core/error.h"
 #include "platemeter/core/version.h"
-#include "platemeter/measure/atomic_file.h"
-#include "platemeter/measure/sha256.h"
+#include "platemeter/core/atomic_file.h"
+#include "platemeter/core/sha256.h"
 #include "platemeter/samples/render.h"
 #include "platemeter/samples/render_crb.h"
 #include "platemeter/samples/simulate.h"
@@ -89,6 +90,40 @@ std::string ChainFileJson(const SimulatedPlate& plate) {
   return j.dump(2) + "\n";
 }
 
+namespace {
+
+// The scan band by band; each band is written (converted, compressed: one
+// thread) while the next one renders, from two buffers.
+void RenderScan(const SimulatedPlate& plate, const std::string& image_path, const RenderProgress& progress) {
+  const SceneRenderer renderer(plate.scene);
+  ImageWriter writer(image_path, plate.image);
+  const long height = plate.scene.height_px, width = plate.scene.width_px;
+  const long band = plate.image.tile_size_px > 0 ? writer.band_height_px() : std::min<long>(64, height);
+  std::vector<float> buffers[2];
+  for (auto& buffer : buffers) buffer.resize(static_cast<size_t>(band * width));
+  std::future<void> writing;  // destroyed (joined) before the writer
+  long rows_written = 0;
+  auto wait_for_write = [&] {
+    if (!writing.valid()) return;
+    writing.get();  // rethrows a write error
+    if (progress) progress(rows_written, height);
+  };
+  int next = 0;
+  for (long y0 = 0; y0 < height; y0 += band, next ^= 1) {
+    const long rows = std::min(band, height - y0);
+    renderer.RenderBand(y0, rows, buffers[next].data());
+    wait_for_write();
+    writing = std::async(std::launch::async, [&writer, &buffers, next, y0, rows] {
+      writer.WriteBand(y0, rows, buffers[next].data());
+    });
+    rows_written = y0 + rows;
+  }
+  wait_for_write();
+  writer.Finish();
+}
+
+}  // namespace
+
 SimulateOutputs WriteSimulatedPlate(SimulatedPlate plate, const std::string& out_dir, const RenderProgress& progress) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -102,20 +137,7 @@ SimulateOutputs WriteSimulatedPlate(SimulatedPlate plate, const std::string& out
   ComputeCramerRaoBounds(&plate);
   const std::string chain_json = ChainFileJson(plate);
 
-  {
-    const SceneRenderer renderer(plate.scene);
-    ImageWriter writer(out.image_path, plate.image);
-    const long height = plate.scene.height_px, width = plate.scene.width_px;
-    const long band = plate.image.tile_size_px > 0 ? writer.band_height_px() : std::min<long>(64, height);
-    std::vector<float> values(static_cast<size_t>(band * width));
-    for (long y0 = 0; y0 < height; y0 += band) {
-      const long rows = std::min(band, height - y0);
-      renderer.RenderBand(y0, rows, values.data());
-      writer.WriteBand(y0, rows, values.data());
-      if (progress) progress(y0 + rows, height);
-    }
-    writer.Finish();
-  }
+  RenderScan(plate, out.image_path, progress);
 
   MeasurementFile truth;
   truth.truth_columns = true;

@@ -35,7 +35,9 @@
 // Elsewhere (bar ends, the cross's centre square, disks' rims, anisotropic
 // PSFs) a composite Gauss-Legendre rule fine enough for the narrowest Gaussian
 // integrates over the pixel (error ~1e-10 of the amplitude; the tests require
-// < 1e-7 against finer rules and brute-force quadrature). A blurred disk's
+// < 1e-7 against finer rules and brute-force quadrature; Gaussians factor the
+// rule's exponentials per pixel axis and take the normal CDF from a Taylor
+// table good to 5e-16, render_geometry.h). A blurred disk's
 // radial profile is tabulated per mark (exact integral, cubic Hermite). With
 // no blur the pixel coverage is exact: polygon clipping (rectangles) or
 // circle-polygon intersection (disks). The scanner blur, isotropic in pixels,
@@ -82,6 +84,11 @@ class MarkModel {
   // The same with the mark moved to centre_px (for derivatives and fits); the
   // support then grows by the shift.
   double PixelValueWithCentre(PixelPoint centre_px, long x_px, long y_px) const;
+  // The pixel's value with the mark at its centre and moved by step_px along x
+  // and y, for central differences: values = {centre, +x, -x, +y, -y}. The same
+  // numbers as five PixelValueWithCentre calls (to rounding), at about half the
+  // cost for trail images (the five share their quadrature's table look-ups).
+  void PixelValuesShifted(double step_px, long x_px, long y_px, double values[5]) const;
 
   struct Impl;  // opaque: the mark's parts (rectangles, disks, Gaussians)
 

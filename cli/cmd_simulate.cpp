@@ -1,6 +1,8 @@
 // platemeter simulate SPEC.toml -o DIR [--full-size] [--seed N]: renders a
 // simulated plate scan with its truth file and true geometry chain
-// (docs/simulator.md).
+// (docs/simulator.md); a block spec (a file with a [block] table) renders every
+// frame of a block with the files measure, batch and the bundle need
+// (docs/block-simulator.md).
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -9,10 +11,43 @@
 
 #include "commands.h"
 #include "platemeter/grids/registry.h"
+#include "platemeter/samples/block_render.h"
+#include "platemeter/samples/block_spec.h"
 #include "platemeter/samples/simulate.h"
 #include "platemeter/samples/spec.h"
 
 namespace platemeter::cli {
+namespace {
+
+// A block spec: lay the block out, render every frame, write the block's files.
+void SimulateBlock(const std::string& path, const std::string& out_dir, bool full_size, std::optional<uint64_t> seed,
+                   const GlobalOptions& global) {
+  sim::BlockSpec spec = sim::ReadBlockSpec(path);
+  if (seed) spec.seed = *seed;
+  const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
+  const sim::BlockLayout layout = sim::LayOutBlock(spec, registry);
+  std::cerr << "simulate: " << layout.summary << "\n";
+  sim::BlockRenderOptions options;
+  options.full_size = full_size;
+  const auto start = std::chrono::steady_clock::now();
+  const sim::BlockOutputs out =
+      sim::WriteSimulatedBlock(spec, layout, registry, out_dir, options,
+                               [&](std::size_t index, std::size_t count, const std::string& frame) {
+                                 std::cerr << "simulate: frame " << index + 1 << " of " << count << ": " << frame
+                                           << " (" << layout.frames[index].points.size() << " passpoints)\n";
+                               });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (std::size_t f = 0; f < out.frames.size(); ++f) std::cout << "scan: " << out.frames[f].image_path << '\n';
+  std::cout << "manifest: " << out.manifest_path << '\n'
+            << "ground points: " << out.ground_points_path << '\n'
+            << "bundle job: " << out.job_path << '\n'
+            << "truth: " << out.truth_path << '\n';
+  std::fprintf(stderr, "simulate: %zu frames rendered in %.1f s; next:\n", out.frames.size(), seconds);
+  std::cerr << "  platemeter batch " << out.manifest_path << " -o " << out.measured_dir << "\n"
+            << "  platemeter calibrate bundle " << out.job_path << " -o OUT\n";
+}
+
+}  // namespace
 
 void RegisterSimulateCommand(CLI::App& app, GlobalOptions& global) {
   struct Args {
@@ -24,13 +59,19 @@ void RegisterSimulateCommand(CLI::App& app, GlobalOptions& global) {
   };
   auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
-      "simulate", "render a simulated plate scan with its truth file and true geometry chain (docs/simulator.md)");
-  cmd->add_option("SPEC", args->spec, "the spec (TOML), e.g. samples/specs/orbigon-stellar.toml")->required();
+      "simulate", "render a simulated plate scan with its truth file and true geometry chain (docs/simulator.md), or every "
+      "frame of a block spec with its manifest, bundle job and truth (docs/block-simulator.md)");
+  cmd->add_option("SPEC", args->spec, "the spec (TOML), e.g. samples/specs/orbigon-stellar.toml, or a block spec "
+                 "(samples/blocks/hasselblad-block.toml)")->required();
   cmd->add_option("-o,--output", args->out_dir, "output folder (created if missing)")->required();
   cmd->add_flag("--full-size", args->full_size, "render at the spec's full_size_pixel_size_um instead of pixel_size_um");
   cmd->add_option("--seed", args->seed, "replaces the spec's seed (all random choices derive from it)");
   cmd->add_flag("-q,--quiet", args->quiet, "no progress on stderr");
   cmd->callback([args, &global] {
+    if (sim::IsBlockSpecFile(args->spec)) {
+      SimulateBlock(args->spec, args->out_dir, args->full_size, args->seed, global);
+      return;
+    }
     const sim::SimulationSpec spec = sim::ReadSimulationSpec(args->spec);
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
     sim::SimulateOptions options;

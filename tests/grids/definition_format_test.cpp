@@ -266,7 +266,7 @@ TEST(DefinitionRegistry, UnknownNamesListTheKnownOnes) {
   EXPECT_THROW(registry.Camera("sn004"), Error);
   EXPECT_THROW(registry.Fiducials("ikogon-b"), Error);  // a grid, not a fiducial set
   EXPECT_EQ(registry.CameraNames(),
-            (std::vector<std::string>{"hasselblad-500", "orbigon", "sn004-stellar", "sn004-terrain"}));
+            (std::vector<std::string>{"hasselblad-500", "hasselblad-80", "orbigon", "sn004-stellar", "sn004-terrain"}));
   EXPECT_EQ(registry.OriginOf("ikogon-b"), "builtin/ikogon-b.toml");
 }
 

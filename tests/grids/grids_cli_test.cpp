@@ -65,9 +65,10 @@ TEST(GridsCli, ListShowsEveryDefinitionWithItsPointCount) {
   EXPECT_EQ(row_of("sn004-stellar"), "camera 25");
   EXPECT_EQ(row_of("orbigon"), "camera 121");
   EXPECT_EQ(row_of("hasselblad-500"), "camera 4");
+  EXPECT_EQ(row_of("hasselblad-80"), "camera 4");
   const auto cameras = RunPlatemeter("cameras list");
   EXPECT_EQ(cameras.exit_code, 0);
-  EXPECT_EQ(Lines(cameras.out).size(), 5u);
+  EXPECT_EQ(Lines(cameras.out).size(), 6u);
 }
 
 TEST(GridsCli, CamerasShowPrintsToml) {

@@ -16,7 +16,7 @@
 #include "platemeter/core/image.h"
 #include "platemeter/grids/registry.h"
 #include "platemeter/measure/measurement_file.h"
-#include "platemeter/measure/sha256.h"
+#include "platemeter/core/sha256.h"
 #include "platemeter/samples/render.h"
 #include "platemeter/samples/simulate.h"
 #include "platemeter/samples/spec.h"

@@ -80,7 +80,7 @@ void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global) {
   m.measure.Option("--emulsion-depth-um", [](MeasureRequest& r) -> auto& { return r.emulsion_depth_um; },
                    "depth of the image centroid in the emulsion (0: no correction)");
   m.measure.Flag("--no-local-reseau", [](MeasureRequest& r) -> auto& { return r.no_local; },
-                 "skip the bilinear local reseau correction");
+                 "never apply the bilinear local reseau correction (by default it is applied where the crosses' residuals show film deformation beyond their measuring noise)");
   m.measure.Flag("--fiducial-orientation", [](MeasureRequest& r) -> auto& { return r.fiducial_orientation; },
                  "reseau cameras: also fit the fiducials and map every point into their frame (fiducial-only cameras always)");
   m.measure.Option("--min-cross-fraction", [](MeasureRequest& r) -> auto& { return r.min_cross_fraction; },

@@ -3,9 +3,11 @@
 
 #include "platemeter/core/scan_orientation.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
+#include <boost/math/distributions/chi_squared.hpp>
 #include <fmt/format.h>
 
 #include "platemeter/core/error.h"
@@ -29,6 +31,10 @@ PlanePoint PlanePointFromPixels(const MeasuredPoint& p) {
 bool PlateCorrectionOptions::Check(std::string* why) const {
   if (!fit.Check(why)) return false;
   if (!fiducial.Check(why)) return false;
+  if (!(local_reseau_significance > 0.0 && local_reseau_significance < 1.0)) {
+    if (why) *why = "local_reseau_significance must lie in (0, 1)";
+    return false;
+  }
   if (temperature_degC) {
     ThermalCorrection t{true, *temperature_degC, calibration_temperature_degC, expansion_per_degC};
     if (!t.Check(why)) return false;
@@ -63,6 +69,26 @@ void SetUpEarlySteps(MeasurementFile* file, const PlateCorrectionOptions& option
   report->thermal.temperature_degC = options.temperature_degC.value_or(options.calibration_temperature_degC);
   report->thermal.calibration_temperature_degC = options.calibration_temperature_degC;
   report->thermal.expansion_per_degC = options.expansion_per_degC;
+}
+
+// The local correction's test (PlateCorrectionOptions::local_reseau): the
+// used crosses' chi-square v'Pv = sigma0^2 (2 n - u) against chi-square(2 n - u).
+// Where it does not reject, the residuals are measuring noise: interpolating
+// them adds the corner crosses' errors to every point of a cell as one shared
+// error (10 rendered Orbigon glass plates: the stellar camera's spread up to
+// 2.2x its sigma with it, within sampling of 1 without; docs/measure.md).
+void TestFilmDeformation(const PlateCorrectionOptions& options, PlateCorrectionReport* report) {
+  const ReseauFit& fit = report->fit;
+  report->reseau_dof = 2 * fit.used - fit.parameter_count;
+  report->reseau_chi2 = fit.sigma0 * fit.sigma0 * std::max(report->reseau_dof, 0);
+  if (report->reseau_dof <= 0) {
+    report->reseau_p_value = 1.0;  // no redundancy: nothing tells deformation from noise
+  } else {
+    const boost::math::chi_squared distribution(report->reseau_dof);
+    report->reseau_p_value = boost::math::cdf(boost::math::complement(distribution, report->reseau_chi2));
+  }
+  report->local_reseau_applied =
+      options.local_reseau && report->reseau_p_value < options.local_reseau_significance;
 }
 
 void WriteMm(const PlanePoint& q, MeasuredPoint* p) {
@@ -127,6 +153,7 @@ PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid
     residuals[observations[i].id] = {report.fit.residual_x_mm[i], report.fit.residual_y_mm[i], g.cov};
   }
   const LocalReseauCorrection local(grid, residuals);
+  TestFilmDeformation(options, &report);
 
   std::map<size_t, size_t> observation_of_row;
   for (size_t i = 0; i < observation_row.size(); ++i) observation_of_row[observation_row[i]] = i;
@@ -142,7 +169,7 @@ PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid
       const auto it = observation_of_row.find(k);
       if (it != observation_of_row.end() && report.fit.is_rejected[it->second]) p.flags.push_back("reseau_fit:rejected");
       if (it == observation_of_row.end()) p.flags.push_back("reseau_fit:not_in_grid");
-    } else if (options.local_reseau) {
+    } else if (report.local_reseau_applied) {
       q = local.Apply(q, &p.flags);
     }
     positions[k] = q;
@@ -178,7 +205,14 @@ PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid
   fit.parameters.push_back({"crosses_used", std::to_string(report.fit.used)});
   fit.parameters.push_back({"crosses_rejected", std::to_string(report.fit.rejected)});
   corrections.push_back(fit);
-  if (options.local_reseau) corrections.push_back({"local_reseau", {{"interpolation", "bilinear"}}});
+  if (options.local_reseau) {
+    corrections.push_back({"local_reseau",
+                           {{"interpolation", "bilinear"},
+                            {"applied", report.local_reseau_applied ? "yes" : "no"},
+                            {"reseau_chi2", Number(report.reseau_chi2)},
+                            {"reseau_dof", std::to_string(report.reseau_dof)},
+                            {"p_value", Number(report.reseau_p_value)}}});
+  }
   if (report.fiducial) corrections.push_back(report.fiducial->Record(options.fiducial_source));
   return report;
 }

@@ -55,6 +55,11 @@ nlohmann::json ValidationJson(const PlateCorrectionReport& r, double tolerance_u
                     {"out_of_tolerance", out}});
   }
   j["residuals"] = rows;
+  j["local_reseau"] = {{"applied", r.local_reseau_applied},
+                       {"chi2", r.reseau_chi2},
+                       {"degrees_of_freedom", r.reseau_dof},
+                       {"p_value", r.reseau_p_value},
+                       {"note", "applied when the residuals' chi-square rejects pure measuring noise at p < 0.01"}};
   j["tolerance_um"] = tolerance_um;
   j["flags"] = {{"rms_out_of_tolerance", f.rms_mm * 1e3 > tolerance_um},
                 {"crosses_out_of_tolerance", out_of_tolerance},

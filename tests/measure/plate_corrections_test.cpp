@@ -136,6 +136,52 @@ TEST(PlateCorrections, RecoversPlateCoordinatesWithinTheirSigmas) {
   EXPECT_GT(std::sqrt(err2_global / (2 * n)), 1.5 * rms_err);
 }
 
+// A glass plate (affine film, no wave): the reseau residuals are measuring
+// noise, the chi-square test does not reject it and the local correction is
+// left out; forced on, it would carry the corner crosses' noise into every
+// passpoint (a larger error than its own). With the 8 um wave it is applied.
+TEST(PlateCorrections, LocalReseauCorrectionOnlyWhereTheFilmIsDeformed) {
+  std::string rigid = PlateSpec(1.0002, "[3.0, 0.0, 0.0, 2.0]");
+  rigid.replace(rigid.find("[2.0, -1.5]"), 11, "[0.0, 0.0]");
+  double err2_tested = 0.0, err2_forced = 0.0;
+  int n = 0;
+  for (unsigned seed = 31; seed < 36; ++seed) {
+    Measured tested = MeasureWithNoise(rigid, seed), forced = MeasureWithNoise(rigid, seed);
+    const PlateCorrectionReport report = CorrectPlate(&tested.file, Orbigon(), OptionsFor(tested.plate, true));
+    EXPECT_FALSE(report.local_reseau_applied) << "seed " << seed << " p " << report.reseau_p_value;
+    EXPECT_GT(report.reseau_p_value, 0.01);
+    EXPECT_EQ(report.reseau_dof, 2 * report.fit.used - report.fit.parameter_count);
+    const AppliedCorrection& record = tested.file.header.corrections.back();
+    ASSERT_EQ(record.name, "local_reseau");
+    EXPECT_EQ(record.parameters[1].first, "applied");
+    EXPECT_EQ(record.parameters[1].second, "no");
+    PlateCorrectionOptions always = OptionsFor(forced.plate, true);
+    always.local_reseau_significance = 1.0 - 1e-12;  // any chi-square rejects: the correction runs
+    ASSERT_TRUE(CorrectPlate(&forced.file, Orbigon(), always).local_reseau_applied);
+    std::map<std::string, const MeasuredPoint*> truth;
+    for (const MeasuredPoint& t : tested.plate.truth) truth[t.id] = &t;
+    for (size_t k = 0; k < tested.file.points.size(); ++k) {
+      const MeasuredPoint& p = tested.file.points[k];
+      if (p.kind != PointKind::kPasspoint) continue;
+      EXPECT_TRUE(p.flags.empty()) << p.id;
+      const MeasuredPoint& t = *truth.at(p.id);
+      const MeasuredPoint& f = forced.file.points[k];
+      err2_tested += std::pow(*p.x_mm - *t.x_mm, 2) + std::pow(*p.y_mm - *t.y_mm, 2);
+      err2_forced += std::pow(*f.x_mm - *t.x_mm, 2) + std::pow(*f.y_mm - *t.y_mm, 2);
+      ++n;
+    }
+  }
+  ASSERT_EQ(n, 200);
+  std::cout << "rigid plate: passpoint rms error " << std::sqrt(err2_tested / (2 * n)) * 1e3 << " um tested, "
+            << std::sqrt(err2_forced / (2 * n)) * 1e3 << " um with the local correction forced\n";
+  EXPECT_GT(err2_forced, 1.1 * err2_tested);
+
+  Measured waved = MeasureWithNoise(PlateSpec(1.0002, "[30.0, 5.0, -8.0, -20.0]", true), 11);
+  const PlateCorrectionReport report = CorrectPlate(&waved.file, Orbigon(), OptionsFor(waved.plate, true));
+  EXPECT_TRUE(report.local_reseau_applied);
+  EXPECT_LT(report.reseau_p_value, 1e-6);
+}
+
 TEST(PlateCorrections, FittedScalesAndNonOrthogonalityMatchTheTrueChain) {
   Measured m = MeasureWithNoise(PlateSpec(1.0002, "[30.0, 5.0, -8.0, -20.0]"), 12);
   const PlateCorrectionReport report = CorrectPlate(&m.file, Orbigon(), OptionsFor(m.plate, true));

@@ -25,7 +25,13 @@ struct PlateCorrectionOptions {
   EmulsionDepthModel emulsion;                 // depth 0: no emulsion-depth correction
   double principal_point_x_mm = 0.0, principal_point_y_mm = 0.0;  // mm; grid frame, centre of the radial model
   ReseauFitOptions fit;
-  bool local_reseau = true;                    // bilinear correction of every non-reseau point
+  // The bilinear local correction of every non-reseau point, applied when the
+  // film deformation is detectable: the reseau fit's chi-square rejects "the
+  // residuals are measuring noise" at local_reseau_significance. Otherwise it
+  // would only carry the corner crosses' noise into every point of a cell as
+  // an error shared by all of them (docs/measure.md, "Local reseau correction").
+  bool local_reseau = true;
+  double local_reseau_significance = 0.01;
   // The fiducial interior orientation. CorrectFiducialPlate always applies it;
   // CorrectPlate (reseau cameras) only when fiducial_orientation is set: the
   // fiducials' reseau-corrected positions are then fitted to `fiducials` and
@@ -47,6 +53,12 @@ struct PlateCorrectionReport {
   // its sigma; meaningful when the emulsion correction was off.
   ValueSigma emulsion_depth_reading_um;
   int points_corrected = 0;
+  // The local correction's test: the fit's chi-square, its degrees of freedom
+  // and the probability of a chi-square that large from noise alone.
+  bool local_reseau_applied = false;
+  double reseau_chi2 = 0.0;
+  int reseau_dof = 0;
+  double reseau_p_value = 1.0;
   std::optional<FiducialOrientation> fiducial;  // when the fiducial step ran
 };
 

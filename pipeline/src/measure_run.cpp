@@ -146,9 +146,13 @@ MeasureSummary Run(const MeasureRequest& request, const DefinitionRegistry& regi
   if (p.grid) {
     console << "reseau fit (" << ReseauFitModelName(report.fit.model) << "): " << report.fit.used << " crosses, "
             << report.fit.rejected << " rejected, rms " << report.fit.rms_mm * 1e3 << " um, sigma0 " << report.fit.sigma0
-            << " (" << report.reseau_dof << " dof); local reseau correction "
-            << (report.local_reseau_applied ? "applied" : "not applied") << " (p = " << report.reseau_p_value
-            << (report.local_reseau_applied ? ": film deformation)\n" : ": the residuals are measuring noise)\n");
+            << " (" << report.reseau_dof << " dof); local reseau correction ";
+    if (request.no_local) {
+      console << "off (--no-local-reseau)\n";
+    } else {
+      console << (report.local_reseau_applied ? "applied" : "not applied") << " (p = " << report.reseau_p_value
+              << (report.local_reseau_applied ? ": film deformation)\n" : ": the residuals are measuring noise)\n");
+    }
   }
   if (report.fiducial) {
     const ReseauFit& f = report.fiducial->fit;

@@ -13,6 +13,7 @@
 #include "cmd_calibrate_stellar.h"
 #include "written_outputs.h"
 #include "commands.h"
+#include "platemeter/core/output_set.h"
 #include "platemeter/calib/bundle_adjustment.h"
 #include "platemeter/calib/bundle_input_io.h"
 #include "platemeter/calib/bundle_report.h"
@@ -152,7 +153,10 @@ void RegisterCalibrateCommand(CLI::App& app, GlobalOptions& global) {
   bundle->add_option("--balance-radius-mm", o->balance_radius_mm, "report the radial profile balanced to zero here, mm")
       ->check(CLI::PositiveNumber);
   bundle->add_flag("--quiet", o->quiet, "no progress on stderr");
-  bundle->callback([o, &global] { RunBundle(*o, global); });
+  bundle->callback([o, &global] {
+    InstallOutputSetInterruptCleanup();
+    RunBundle(*o, global);
+  });
   RegisterCalibrateSimulate(calibrate, global);
   RegisterCalibrateStellar(calibrate, global);
 }

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "platemeter/core/output_set.h"
 #include "platemeter/core/error.h"
 
 namespace platemeter::cli {
@@ -110,7 +111,10 @@ void RegisterCalibrateSimulate(CLI::App* calibrate, GlobalOptions& global) {
   cmd->add_option("--format", args->format, "what to print: text or json")
       ->check(CLI::IsMember({"text", "json"}))
       ->capture_default_str();
-  cmd->callback([args] { RunSimulate(*args); });
+  cmd->callback([args] {
+    InstallOutputSetInterruptCleanup();
+    RunSimulate(*args);
+  });
 }
 
 }  // namespace platemeter::cli

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "platemeter/core/output_set.h"
 #include "platemeter/calib/stellar_job.h"
 #include "platemeter/calib/stellar_report.h"
 #include "platemeter/grids/registry.h"
@@ -94,7 +95,10 @@ void RegisterCalibrateStellar(CLI::App* calibrate, GlobalOptions& global) {
   stellar->add_option("JOB", o->job, "stellar job file (TOML)")->required()->check(CLI::ExistingFile);
   stellar->add_option("-o,--output", o->output_dir, "output folder")->required();
   stellar->add_flag("--quiet", o->quiet, "no progress on stderr");
-  stellar->callback([o, &global] { RunStellar(*o, global); });
+  stellar->callback([o, &global] {
+    InstallOutputSetInterruptCleanup();
+    RunStellar(*o, global);
+  });
 }
 
 }  // namespace platemeter::cli

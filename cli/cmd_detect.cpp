@@ -2,12 +2,12 @@
 // crosses and fiducial marks with ids, positions, sigmas and statuses (and stars,
 // trails, passpoints on request), into a measurement file and a JSON summary (the
 // flow is the pipeline's RunDetection, pipeline/detect_run.h; the options detect_options.cpp's).
-#include <filesystem>
 #include <iostream>
 #include <memory>
 
 #include "commands.h"
 #include "detect_options.h"
+#include "platemeter/core/output_set.h"
 #include "platemeter/pipeline/detect_run.h"
 #include "platemeter/pipeline/job_file.h"
 
@@ -36,8 +36,11 @@ void RegisterDetectCommand(CLI::App& app, GlobalOptions& global) {
         overlay->Resolve(job_file->empty() ? DetectRequest{} : pipeline::LoadJobFile(*job_file).measure.detect);
     request.scan = *scan;
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
+    pipeline::CheckDetectOptions(request);
+    InstallOutputSetInterruptCleanup();
+    OutputSet outputs(*out_dir, pipeline::DetectSetMembers(request.scan));
     const pipeline::DetectRun run = pipeline::RunDetection(request, registry);
-    const pipeline::DetectFiles files = pipeline::WriteDetectRun(run, request.scan, *out_dir);
+    const pipeline::DetectFiles files = pipeline::WriteDetectRun(run, request.scan, &outputs);
     std::cout << run.messages << files.measurements_csv << "\n" << files.summary_json << "\n";
   });
 }

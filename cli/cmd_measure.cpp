@@ -9,6 +9,7 @@
 #include "commands.h"
 #include "detect_options.h"
 #include "platemeter/core/error.h"
+#include "platemeter/core/output_set.h"
 #include "platemeter/grids/registry.h"
 #include "platemeter/pipeline/job_file.h"
 #include "platemeter/pipeline/measure_run.h"
@@ -66,6 +67,7 @@ void RegisterValidate(CLI::App& app, GlobalOptions& global) {
   val->callback([o, &global] {
     const MeasureRequest request = o->Resolve("validate");
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
+    InstallOutputSetInterruptCleanup();
     pipeline::RunValidate(request, registry, std::cout);
   });
 }
@@ -92,6 +94,7 @@ void RegisterMeasureCommand(CLI::App& app, GlobalOptions& global) {
   cmd->callback([o, &global] {
     const MeasureRequest request = o->Resolve("measure");
     const DefinitionRegistry registry = DefinitionRegistry::Load(global.definition_files);
+    InstallOutputSetInterruptCleanup();
     std::cout << pipeline::RunMeasure(request, registry).message;
   });
   RegisterValidate(app, global);

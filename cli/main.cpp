@@ -1,4 +1,6 @@
 // platemeter: digital comparator and calibration workbench for metric-camera plates.
+#include <glog/logging.h>
+
 #include <exception>
 #include <iostream>
 
@@ -9,6 +11,9 @@
 
 int main(int argc, char** argv) {
   using namespace platemeter;
+  // The solvers' own log lines (Ceres through glog) would break the one-line error policy; every
+  // failure they report is checked and turned into platemeter's own status or message.
+  FLAGS_minloglevel = google::GLOG_FATAL;
   CLI::App app{"platemeter: measure and calibrate scanned metric-camera plates and films"};
   app.set_version_flag("--version", std::string("platemeter ") + kVersion);
   app.require_subcommand(1);

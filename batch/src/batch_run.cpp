@@ -8,6 +8,7 @@
 #include <tbb/task_group.h>
 
 #include <atomic>
+#include <new>
 #include <cerrno>
 #include <cstring>
 #include <condition_variable>
@@ -60,7 +61,7 @@ double Since(std::chrono::steady_clock::time_point t0) {
 // earlier run with other options left (e.g. a plot no longer made). Removed so the folder holds
 // exactly what the record lists.
 void RemoveLeftovers(const std::string& folder, const ScanRecord& record) {
-  std::set<std::string> keep = {record.stem + ".batch.json"};
+  std::set<std::string> keep = {ScanFolderName(record.stem) + ".batch.json"};
   for (const OutputFile& o : record.outputs) keep.insert(o.name);
   std::error_code ec;
   std::vector<fs::path> doomed;
@@ -118,6 +119,7 @@ ItemResult ProcessOne(const BatchItem& item, const ScanWork& work, const BatchOp
   struct stat st {};
   if (::stat(input.path.c_str(), &st) != 0) {
     failure = input.path + ": cannot read the scan (" + std::strerror(errno) + ")";
+    if (errno != ENOENT && errno != ENOTDIR) record.failure = "environment";  // no permission, I/O error
   } else if (!S_ISREG(st.st_mode)) {
     failure = input.path + ": not a regular file";
   } else {
@@ -140,7 +142,10 @@ ItemResult ProcessOne(const BatchItem& item, const ScanWork& work, const BatchOp
   auto current = [&](const std::optional<ScanRecord>& r) -> std::optional<ItemResult> {
     if (options.force || !r || record.fingerprint.empty() || r->fingerprint != record.fingerprint) return std::nullopt;
     std::string why;
-    if (r->status == "failed" && !options.retry_failed) return ItemResult{Outcome::kSkippedFailed, r->reason};
+    // A failure of the machine (disk full, permission) is retried; one of the input is remembered.
+    if (r->status == "failed" && r->failure != "environment" && !options.retry_failed) {
+      return ItemResult{Outcome::kSkippedFailed, r->reason};
+    }
     if (r->status == "ok" && OutputsIntact(*r, folder, &why)) return ItemResult{Outcome::kSkippedOk, ""};
     return std::nullopt;
   };
@@ -148,7 +153,7 @@ ItemResult ProcessOne(const BatchItem& item, const ScanWork& work, const BatchOp
 
   std::error_code ec;
   fs::create_directories(folder, ec);
-  const ScanLock lock((fs::path(folder) / ("." + input.stem + ".batch.lock")).string());
+  const ScanLock lock((fs::path(folder) / ("." + ScanFolderName(input.stem) + ".batch.lock")).string());
   if (lock.busy()) return {Outcome::kBusy, "being measured by another batch process"};
   // Another process may have finished it between the first look and the lock.
   if (std::optional<ItemResult> skip = current(ReadScanRecord(record_path))) return *skip;
@@ -178,14 +183,25 @@ ItemResult ProcessOne(const BatchItem& item, const ScanWork& work, const BatchOp
       if (!result.report_json.empty()) record.report_json = fs::path(result.report_json).filename().string();
       if (!result.plot_png.empty()) record.plot_png = fs::path(result.plot_png).filename().string();
       record.status = "ok";
+    } catch (const EnvironmentError& e) {
+      failure = OneLine(e.what());
+      record.failure = "environment";
+    } catch (const std::bad_alloc&) {
+      failure = "out of memory";
+      record.failure = "environment";
+    } catch (const fs::filesystem_error& e) {
+      failure = OneLine(e.what());
+      record.failure = "environment";
     } catch (const std::exception& e) {
       failure = OneLine(e.what());
+      record.failure = "input";
     }
   }
   if (!failure.empty()) {
     // Nothing of a failed scan's result is kept: its outputs go (RemoveLeftovers) and the record says why.
     record.status = "failed";
     record.reason = failure;
+    if (record.failure.empty()) record.failure = "input";
     record.counts_by_status.clear();
     record.counts_by_kind.clear();
     record.reseau_rms_um.reset();

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "platemeter/core/error.h"
+#include "platemeter/core/text_input.h"
 
 namespace platemeter {
 namespace fs = std::filesystem;
@@ -126,8 +127,12 @@ std::vector<ScanInput> ListScanFolder(const std::string& folder, bool recursive)
 }
 
 std::vector<ScanInput> ReadScanManifest(const std::string& path, const std::vector<std::string>& allowed_columns) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path, "cannot open the manifest");
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw Error(path, "cannot open the manifest");
+  std::stringstream text;
+  text << file.rdbuf();
+  if (file.bad()) throw Error(path, "cannot read the manifest");
+  std::istringstream in{std::string(WithoutUtf8Bom(text.str()))};  // spreadsheets write a byte order mark
   const fs::path base = fs::path(path).parent_path();
   int line_number = 0;
   std::vector<std::string> fields, header;
@@ -152,6 +157,9 @@ std::vector<ScanInput> ReadScanManifest(const std::string& path, const std::vect
   for (size_t c = 0; c < header.size(); ++c) {
     const std::string name = Trim(header[c]);
     const std::string where = "line " + std::to_string(header_line) + ": ";
+    if (const std::string why = TextFieldProblem(name); !why.empty()) {
+      throw Error(path, where + "column " + std::to_string(c + 1) + " name " + why);
+    }
     if (name.empty()) throw Error(path, where + "column " + std::to_string(c + 1) + " has no name");
     if (seen.count(name)) throw Error(path, where + "column '" + name + "' appears twice");
     seen[name] = static_cast<int>(c);
@@ -174,6 +182,12 @@ std::vector<ScanInput> ReadScanManifest(const std::string& path, const std::vect
     if (fields.size() != header.size()) {
       throw Error(path, where + std::to_string(fields.size()) + " fields, the header has " +
                             std::to_string(header.size()));
+    }
+    // Scan names become plate ids and folder names; values feed the job's options.
+    for (size_t c = 0; c < header.size(); ++c) {
+      if (const std::string why = TextFieldProblem(Trim(fields[c])); !why.empty()) {
+        throw Error(path, where + "column '" + header[c] + "' " + why);
+      }
     }
     const std::string scan = Trim(fields[scan_column]);
     if (scan.empty()) throw Error(path, where + "empty 'scan' field");

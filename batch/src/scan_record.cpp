@@ -35,6 +35,7 @@ std::string FormatScanRecord(const ScanRecord& r) {
   j["scan"] = r.scan;
   j["status"] = r.status;
   j["reason"] = r.reason;
+  if (r.status == "failed") j["failure"] = r.failure.empty() ? "input" : r.failure;
   j["fingerprint"] = r.fingerprint;
   j["scan_sha256"] = r.scan_sha256;
   j["scan_size_bytes"] = r.scan_size_bytes;
@@ -71,6 +72,12 @@ ScanRecord ParseScanRecord(const std::string& text, const std::string& subject) 
     r.status = j.at("status").get<std::string>();
     if (r.status != "ok" && r.status != "failed") throw Error(subject, "status '" + r.status + "' is not ok or failed");
     r.reason = j.at("reason").get<std::string>();
+    if (r.status == "failed") {
+      r.failure = j.value("failure", "input");
+      if (r.failure != "input" && r.failure != "environment") {
+        throw Error(subject, "failure '" + r.failure + "' is not input or environment");
+      }
+    }
     r.fingerprint = j.at("fingerprint").get<std::string>();
     r.scan_sha256 = j.at("scan_sha256").get<std::string>();
     r.scan_size_bytes = j.at("scan_size_bytes").get<uint64_t>();
@@ -94,10 +101,19 @@ ScanRecord ParseScanRecord(const std::string& text, const std::string& subject) 
   }
 }
 
-std::string ScanFolder(const std::string& out_dir, const std::string& stem) { return (fs::path(out_dir) / stem).string(); }
+std::string ScanFolderName(const std::string& stem) {
+  // The longest name measure writes is <stem>.measurements.csv; 255 bytes is Linux's NAME_MAX.
+  constexpr size_t kNameMax = 255, kLongestSuffix = sizeof(".measurements.csv") - 1;
+  if (stem.size() + kLongestSuffix <= kNameMax) return stem;
+  return stem.substr(0, 200) + "~" + Sha256Hex(stem).substr(0, 12);
+}
+
+std::string ScanFolder(const std::string& out_dir, const std::string& stem) {
+  return (fs::path(out_dir) / ScanFolderName(stem)).string();
+}
 
 std::string RecordPath(const std::string& out_dir, const std::string& stem) {
-  return (fs::path(out_dir) / stem / (stem + ".batch.json")).string();
+  return (fs::path(ScanFolder(out_dir, stem)) / (ScanFolderName(stem) + ".batch.json")).string();
 }
 
 std::optional<ScanRecord> ReadScanRecord(const std::string& path, std::string* why) {
@@ -163,9 +179,9 @@ std::vector<ScanRecord> ReadAllRecords(const std::string& out_dir) {
   for (fs::directory_iterator it(out_dir, ec), end; !ec && it != end; it.increment(ec)) {
     std::error_code e;
     if (!it->is_directory(e)) continue;
-    const std::string stem = it->path().filename().string();
-    if (stem.empty() || stem[0] == '.') continue;
-    const std::string path = RecordPath(out_dir, stem);
+    const std::string folder_name = it->path().filename().string();
+    if (folder_name.empty() || folder_name[0] == '.') continue;
+    const std::string path = (it->path() / (folder_name + ".batch.json")).string();
     if (!fs::exists(path, e)) continue;
     std::string why;
     std::optional<ScanRecord> r = ReadScanRecord(path, &why);

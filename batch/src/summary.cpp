@@ -38,10 +38,10 @@ std::string CsvField(const std::string& s) {
 
 std::string Html(const std::string& s) { return EscapeMarkup(s); }
 
-// A relative link to OUT/<stem>/<name>; the stem and name are percent-escaped where URLs need it.
-std::string Href(const std::string& stem, const std::string& name) {
+// A relative link to OUT/<folder>/<name>; both are percent-escaped where URLs need it.
+std::string Href(const std::string& folder, const std::string& name) {
   std::string out;
-  for (unsigned char c : stem + "/" + name) {
+  for (unsigned char c : folder + "/" + name) {
     if (std::isalnum(c) || c == '/' || c == '.' || c == '-' || c == '_' || c == '~') {
       out += static_cast<char>(c);
     } else {
@@ -92,7 +92,7 @@ std::string FormatSummaryCsv(const std::vector<ScanRecord>& records) {
     row.push_back(seconds);
     row.push_back(r.finished_utc);
     row.push_back(r.fingerprint);
-    row.push_back(r.report_json.empty() ? "" : r.stem + "/" + r.report_json);
+    row.push_back(r.report_json.empty() ? "" : ScanFolderName(r.stem) + "/" + r.report_json);
     for (size_t c = 0; c < row.size(); ++c) out << (c ? "," : "") << CsvField(row[c]);
     out << "\n";
   }
@@ -113,7 +113,7 @@ std::string FormatHtmlIndex(const std::vector<ScanRecord>& records) {
       << "<th>scan</th><th>status</th><th>measured</th><th>rejected</th><th>missing</th>"
       << "<th>reseau RMS (um)</th><th>scale x</th><th>scale y</th><th>time (s)</th><th>outputs</th><th>plot</th></tr>\n";
   for (const ScanRecord& r : records) {
-    out << "<tr class=\"" << (r.status == "ok" ? "ok" : "failed") << "\"><td><a href=\"" << Href(r.stem, "") << "\">"
+    out << "<tr class=\"" << (r.status == "ok" ? "ok" : "failed") << "\"><td><a href=\"" << Href(ScanFolderName(r.stem), "") << "\">"
         << Html(r.stem) << "</a></td><td>" << Html(r.status);
     if (!r.reason.empty()) out << ": " << Html(r.reason);
     out << "</td>";
@@ -130,11 +130,11 @@ std::string FormatHtmlIndex(const std::vector<ScanRecord>& records) {
         << fixed(r.scale_x, "%.7f") << "</td><td class=\"num\">" << fixed(r.scale_y, "%.7f")
         << "</td><td class=\"num\">" << seconds << "</td><td>";
     const std::string csv = MeasurementsName(r);
-    if (!r.report_json.empty()) out << "<a href=\"" << Href(r.stem, r.report_json) << "\">report</a> ";
-    if (!csv.empty()) out << "<a href=\"" << Href(r.stem, csv) << "\">measurements</a> ";
-    out << "<a href=\"" << Href(r.stem, r.stem + ".batch.json") << "\">record</a></td><td>";
+    if (!r.report_json.empty()) out << "<a href=\"" << Href(ScanFolderName(r.stem), r.report_json) << "\">report</a> ";
+    if (!csv.empty()) out << "<a href=\"" << Href(ScanFolderName(r.stem), csv) << "\">measurements</a> ";
+    out << "<a href=\"" << Href(ScanFolderName(r.stem), ScanFolderName(r.stem) + ".batch.json") << "\">record</a></td><td>";
     if (!r.plot_png.empty()) {
-      out << "<a href=\"" << Href(r.stem, r.plot_png) << "\"><img src=\"" << Href(r.stem, r.plot_png)
+      out << "<a href=\"" << Href(ScanFolderName(r.stem), r.plot_png) << "\"><img src=\"" << Href(ScanFolderName(r.stem), r.plot_png)
           << "\" alt=\"residuals of " << Html(r.stem) << "\"></a>";
     }
     out << "</td></tr>\n";

@@ -25,7 +25,7 @@ int RemoveTemporaries(const std::string& folder) {
   }
   for (const fs::path& p : doomed) {
     std::error_code e;
-    if (fs::remove(p, e)) ++removed;
+    if (fs::remove_all(p, e) > 0) ++removed;  // a file, or an output set's staging folder (core/output_set.h)
   }
   return removed;
 }

@@ -11,9 +11,18 @@
 #include "platemeter/calib/bundle_input_io.h"
 #include "platemeter/core/error.h"
 #include "platemeter/core/atomic_file.h"
+#include "platemeter/core/text_input.h"
 
 namespace platemeter {
 namespace {
+
+// Accepted ranges (docs/bundle-job.md, "Accepted ranges").
+constexpr NumberRange kImageMm{-1e4, 1e4, "mm"};        // camera-frame coordinates; formats are < 500 mm
+constexpr NumberRange kImageSigmaMm{0.0, 1e3, "mm"};    // > 0 as well
+// Object coordinates: geocentric ones are < 7e6 m, but the round-trip test
+// writes 1e22 m, so the bound is numerical (squares of sums stay finite).
+constexpr NumberRange kObjectM{-1e30, 1e30, "m"};
+constexpr NumberRange kObjectSigmaM{0.0, 1e9, "m"};
 
 std::string Trim(const std::string& s) {
   const size_t begin = s.find_first_not_of(" \t");
@@ -48,7 +57,7 @@ class CsvReader {
  public:
   CsvReader(const std::string& text, const std::string& origin, const std::array<const char*, N>& columns,
             const char* what)
-      : in_(text.rfind("\xEF\xBB\xBF", 0) == 0 ? text.substr(3) : text),  // a UTF-8 byte order mark (spreadsheets)
+      : in_(std::string(WithoutUtf8Bom(text))),  // a UTF-8 byte order mark (spreadsheets)
         origin_(origin),
         columns_(columns),
         what_(what) {}
@@ -100,7 +109,13 @@ class CsvReader {
 
   std::string Id(const std::string& field, size_t column) const {
     if (field.empty()) FailColumn(column, "empty");
+    if (const std::string why = TextFieldProblem(field); !why.empty()) FailColumn(column, why);
     return field;
+  }
+  double Number(const std::string& field, size_t column, const NumberRange& range) const {
+    const double value = Number(field, column);
+    if (!range.Contains(value)) FailColumn(column, OutsideRange(field, range));
+    return value;
   }
   double Number(const std::string& field, size_t column) const {
     if (field.empty()) FailColumn(column, "empty (a number is required)");
@@ -179,8 +194,8 @@ std::vector<ImageObservation> ParseObservationsCsv(const std::string& text, cons
     ImageObservation o;
     o.frame = reader.Id(f[0], 0);
     o.point_id = reader.Id(f[1], 1);
-    o.x_mm = reader.Number(f[2], 2);
-    o.y_mm = reader.Number(f[3], 3);
+    o.x_mm = reader.Number(f[2], 2, kImageMm);
+    o.y_mm = reader.Number(f[3], 3, kImageMm);
     o.sigma_x_mm = reader.Number(f[4], 4);
     o.sigma_y_mm = reader.Number(f[5], 5);
     for (size_t column : {4u, 5u}) {
@@ -189,6 +204,7 @@ std::vector<ImageObservation> ParseObservationsCsv(const std::string& text, cons
         reader.FailColumn(column, "a standard deviation of an image observation must be positive ('" + f[column] +
                                       "')");
       }
+      if (!kImageSigmaMm.Contains(sigma)) reader.FailColumn(column, OutsideRange(f[column], kImageSigmaMm));
     }
     const auto [it, inserted] = seen.emplace(std::make_pair(o.frame, o.point_id), reader.line());
     if (!inserted) {
@@ -246,7 +262,7 @@ std::vector<GroundPoint> ParseGroundPointsCsv(const std::string& text, const std
   while (reader.Next(&f)) {
     GroundPoint p;
     p.id = reader.Id(f[0], 0);
-    for (int axis = 0; axis < 3; ++axis) p.position_m[axis] = reader.Number(f[1 + axis], 1 + axis);
+    for (int axis = 0; axis < 3; ++axis) p.position_m[axis] = reader.Number(f[1 + axis], 1 + axis, kObjectM);
     for (int axis = 0; axis < 3; ++axis) {
       const size_t column = 4 + axis;
       if (f[column].empty()) continue;  // free
@@ -255,6 +271,7 @@ std::vector<GroundPoint> ParseGroundPointsCsv(const std::string& text, const std
         reader.FailColumn(column, "a standard deviation cannot be negative ('" + f[column] +
                                       "'; 0 = fixed, empty = free)");
       }
+      if (!kObjectSigmaM.Contains(sigma)) reader.FailColumn(column, OutsideRange(f[column], kObjectSigmaM));
       p.sigma_m[axis] = sigma;
     }
     const auto [it, inserted] = seen.emplace(p.id, reader.line());

@@ -25,13 +25,22 @@ using job_toml::LineOf;
 
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
+// Accepted ranges (docs/bundle-job.md, "Accepted ranges"): wide for any real
+// block, narrow enough that squares and products stay finite.
+constexpr double kMaxParameter = 1e12;    // camera parameters in their units (c_mm, k1_per_mm2, ...)
+constexpr double kMaxFormatMm = 1000.0;   // mm
+constexpr double kMaxObjectM = 1e30;      // m; as the ground points CSV
+constexpr double kMaxSigmaM = 1e9;        // m
+constexpr double kMaxAngleDeg = 360.0;    // deg
+constexpr double kMaxSpeedMPerS = 1e8;    // m/s; below the speed of light (only its direction is used)
+
 // ---------------------------------------------------------------------------
 // [[camera]]
 
 void ReadParameter(const JobReader& r, const toml::node& node, const std::string& key, double* value,
                    ParameterState* state) {
   if (node.is_number()) {
-    *value = r.Number(node, key, -1e300, 1e300);
+    *value = r.Number(node, key, -kMaxParameter, kMaxParameter);
     return;
   }
   if (node.is_string()) {
@@ -48,10 +57,10 @@ void ReadParameter(const JobReader& r, const toml::node& node, const std::string
   const toml::table* table = node.as_table();
   if (!table) r.FailKey(node, key, "must be a number, \"free\", \"fixed\" or { value = .., state = .., sigma = .. }");
   r.CheckKeys(*table, key + ".", {"value", "state", "sigma"});
-  if (const toml::node* v = table->get("value")) *value = r.Number(*v, key + ".value", -1e300, 1e300);
+  if (const toml::node* v = table->get("value")) *value = r.Number(*v, key + ".value", -kMaxParameter, kMaxParameter);
   const toml::node* sigma_node = table->get("sigma");
   const bool has_sigma = sigma_node != nullptr;
-  const double sigma = has_sigma ? r.Number(*sigma_node, key + ".sigma", 0.0, 1e300) : 0.0;
+  const double sigma = has_sigma ? r.Number(*sigma_node, key + ".sigma", 0.0, kMaxParameter) : 0.0;
   if (const toml::node* s = table->get("state")) {
     const std::string name = r.String(*s, key + ".state");
     if (name == "free" || name == "fixed") {
@@ -96,7 +105,7 @@ CameraSetup ReadCamera(const JobReader& r, const toml::table& t, const Definitio
     }
   }
   if (const toml::node* format = t.get("format_mm")) {
-    const std::vector<double> wh = r.Numbers(*format, "camera.format_mm", 2);
+    const std::vector<double> wh = r.Numbers(*format, "camera.format_mm", 2, -kMaxFormatMm, kMaxFormatMm);
     if (!(wh[0] > 0.0) || !(wh[1] > 0.0)) r.FailKey(*format, "camera.format_mm", "must be two positive numbers (mm)");
     camera.format_width_mm = wh[0];
     camera.format_height_mm = wh[1];
@@ -184,9 +193,9 @@ FrameRead ReadFrame(const JobReader& r, const toml::table& t, const std::vector<
   }
   if (f.id.empty()) r.Fail(&t, "[[frame]] needs an id (or measurements, whose plate_id is the id)");
 
-  if (const toml::node* p = t.get("position_m")) f.position_m = r.Vector3(*p, "frame.position_m");
+  if (const toml::node* p = t.get("position_m")) f.position_m = r.Vector3(*p, "frame.position_m", -kMaxObjectM, kMaxObjectM);
   if (const toml::node* a = t.get("angles_deg")) {
-    const Eigen::Vector3d deg = r.Vector3(*a, "frame.angles_deg");
+    const Eigen::Vector3d deg = r.Vector3(*a, "frame.angles_deg", -kMaxAngleDeg, kMaxAngleDeg);
     f.angles = PhiOmegaKappaT{deg[0] * kRadPerDeg, deg[1] * kRadPerDeg, deg[2] * kRadPerDeg};
   }
   const toml::node* covariance = t.get("position_covariance_m2");
@@ -205,9 +214,10 @@ FrameRead ReadFrame(const JobReader& r, const toml::table& t, const std::vector<
   if (forms == 1 && !f.position_m) {
     r.Fail(first_form, "frame '" + f.id + "': position sigmas need the a-priori position (position_m)");
   }
-  if (covariance) f.position_covariance_m2 = r.Matrix3(*covariance, "frame.position_covariance_m2");
+  if (covariance) f.position_covariance_m2 = r.Matrix3(*covariance, "frame.position_covariance_m2", -kMaxSigmaM * kMaxSigmaM,
+                                                          kMaxSigmaM * kMaxSigmaM);
   if (axis_sigmas) {
-    const Eigen::Vector3d s = r.Vector3(*axis_sigmas, "frame.position_sigma_m");
+    const Eigen::Vector3d s = r.Vector3(*axis_sigmas, "frame.position_sigma_m", -kMaxSigmaM, kMaxSigmaM);
     if (!(s.minCoeff() > 0.0)) r.FailKey(*axis_sigmas, "frame.position_sigma_m", "must be three positive numbers (m)");
     f.position_covariance_m2 = s.cwiseProduct(s).asDiagonal();
   }
@@ -217,10 +227,10 @@ FrameRead ReadFrame(const JobReader& r, const toml::table& t, const std::vector<
                              "': the track form needs in_track_sigma_m, cross_track_sigma_m, radial_sigma_m and "
                              "velocity_m_per_s");
     }
-    const double s_in = r.Number(*track[0], "frame.in_track_sigma_m", 0.0, 1e300, false);
-    const double s_cross = r.Number(*track[1], "frame.cross_track_sigma_m", 0.0, 1e300, false);
-    const double s_radial = r.Number(*track[2], "frame.radial_sigma_m", 0.0, 1e300, false);
-    const Eigen::Vector3d v = r.Vector3(*velocity, "frame.velocity_m_per_s");
+    const double s_in = r.Number(*track[0], "frame.in_track_sigma_m", 0.0, kMaxSigmaM, false);
+    const double s_cross = r.Number(*track[1], "frame.cross_track_sigma_m", 0.0, kMaxSigmaM, false);
+    const double s_radial = r.Number(*track[2], "frame.radial_sigma_m", 0.0, kMaxSigmaM, false);
+    const Eigen::Vector3d v = r.Vector3(*velocity, "frame.velocity_m_per_s", -kMaxSpeedMPerS, kMaxSpeedMPerS);
     try {
       f.position_covariance_m2 = StationCovarianceFromTrack(*f.position_m, v, s_in, s_cross, s_radial);
     } catch (const Error& e) {
@@ -229,7 +239,7 @@ FrameRead ReadFrame(const JobReader& r, const toml::table& t, const std::vector<
   }
   if (const toml::node* a = t.get("angle_sigma_deg")) {
     if (!f.angles) r.FailKey(*a, "frame.angle_sigma_deg", "needs the a-priori angles (angles_deg)");
-    const Eigen::Vector3d deg = r.Vector3(*a, "frame.angle_sigma_deg");
+    const Eigen::Vector3d deg = r.Vector3(*a, "frame.angle_sigma_deg", -kMaxAngleDeg, kMaxAngleDeg);
     if (!(deg.minCoeff() > 0.0)) r.FailKey(*a, "frame.angle_sigma_deg", "must be three positive numbers (degrees)");
     f.angle_sigma_rad = deg * kRadPerDeg;
   }
@@ -257,8 +267,8 @@ DistanceObservation ReadDistance(const JobReader& r, const toml::table& t) {
   d.from = r.String(*t.get("from"), "distance.from");
   d.to = r.String(*t.get("to"), "distance.to");
   if (d.from == d.to) r.Fail(t.get("to"), "[[distance]] from and to are both '" + d.from + "'");
-  d.distance_m = r.Number(*t.get("distance_m"), "distance.distance_m", 0.0, 1e300, false);
-  d.sigma_m = r.Number(*t.get("sigma_m"), "distance.sigma_m", 0.0, 1e300);
+  d.distance_m = r.Number(*t.get("distance_m"), "distance.distance_m", 0.0, kMaxObjectM, false);
+  d.sigma_m = r.Number(*t.get("sigma_m"), "distance.sigma_m", 0.0, kMaxSigmaM);
   return d;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 // Writing an adjustment's set of output files (calibration.json, report.md, ...):
-// the folder is created, every text was formatted before (a failure leaves no
-// partial set), and each file is written atomically (temporary name + rename).
+// every text was formatted before, and the files land as one set (core/output_set.h:
+// a staging folder renamed into place at the end), so a failure, a full disk or an
+// interrupt leaves the earlier run's files, never a mix.
 #include <string>
 #include <utility>
 #include <vector>

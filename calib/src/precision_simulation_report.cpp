@@ -5,9 +5,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "output_files.h"
 #include "platemeter/calib/precision_simulation.h"
 #include "platemeter/core/error.h"
-#include "platemeter/core/atomic_file.h"
 
 namespace platemeter {
 namespace {
@@ -223,14 +223,7 @@ std::string FormatPrecisionJson(const PrecisionSimulationResult& r) {
 }
 
 std::vector<std::string> WritePrecisionOutputs(const std::string& dir, const PrecisionSimulationResult& result) {
-  std::error_code error;
-  std::filesystem::create_directories(dir, error);
-  if (error) throw Error(dir, "cannot create the output folder: " + error.message());
-  const std::string json = (std::filesystem::path(dir) / "precision.json").string();
-  const std::string text = (std::filesystem::path(dir) / "precision.txt").string();
-  WriteFileAtomically(json, FormatPrecisionJson(result));
-  WriteFileAtomically(text, FormatPrecisionText(result));
-  return {json, text};
+  return WriteOutputFiles(dir, {{"precision.json", FormatPrecisionJson(result)}, {"precision.txt", FormatPrecisionText(result)}});
 }
 
 }  // namespace platemeter

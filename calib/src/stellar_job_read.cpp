@@ -55,6 +55,7 @@ std::vector<StarImageObservation> ReadPlateImages(const std::string& path, const
     StarImageObservation o;
     o.image_id = p.id;
     o.star_id = p.star_id;
+    if (p.mid_time_utc.size() > 64) throw Error(where, "mid_time_utc is longer than 64 characters (not an ISO 8601 time)");
     try {
       o.mid_time = calib::ParseUtcIso8601(p.mid_time_utc);
     } catch (const Error& e) {

@@ -86,7 +86,9 @@ class JobReader {
     if (!node.is_boolean()) FailKey(node, key, "must be true or false");
     return node.as_boolean()->get();
   }
-  std::vector<double> Numbers(const toml::node& node, const std::string& key, size_t count) const {
+  // Each element in [min, max] (docs/bundle-job.md, "Accepted ranges").
+  std::vector<double> Numbers(const toml::node& node, const std::string& key, size_t count, double min = -1e300,
+                              double max = 1e300) const {
     const toml::array* array = node.as_array();
     if (!array || array->size() != count) {
       FailKey(node, key, "must be an array of " + std::to_string(count) + " numbers");
@@ -94,19 +96,21 @@ class JobReader {
     std::vector<double> out;
     for (const toml::node& item : *array) {
       if (!item.is_number()) FailKey(node, key, "must be an array of " + std::to_string(count) + " numbers");
-      out.push_back(Number(item, key, -1e300, 1e300));
+      out.push_back(Number(item, key, min, max));
     }
     return out;
   }
-  Eigen::Vector3d Vector3(const toml::node& node, const std::string& key) const {
-    const std::vector<double> v = Numbers(node, key, 3);
+  Eigen::Vector3d Vector3(const toml::node& node, const std::string& key, double min = -1e300,
+                          double max = 1e300) const {
+    const std::vector<double> v = Numbers(node, key, 3, min, max);
     return Eigen::Vector3d(v[0], v[1], v[2]);
   }
-  Eigen::Matrix3d Matrix3(const toml::node& node, const std::string& key) const {
+  Eigen::Matrix3d Matrix3(const toml::node& node, const std::string& key, double min = -1e300,
+                          double max = 1e300) const {
     const toml::array* rows = node.as_array();
     if (!rows || rows->size() != 3) FailKey(node, key, "must be 3 rows of 3 numbers, [[..], [..], [..]]");
     Eigen::Matrix3d m;
-    for (int r = 0; r < 3; ++r) m.row(r) = Vector3((*rows)[r], key).transpose();
+    for (int r = 0; r < 3; ++r) m.row(r) = Vector3((*rows)[r], key, min, max).transpose();
     return m;
   }
   // A string or an array of strings.

@@ -1,32 +1,56 @@
 #include "platemeter/core/atomic_file.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
 
 #include "platemeter/core/error.h"
 
 namespace platemeter {
+namespace {
+
+// The OS's reason for the last failed call, e.g. "No space left on device".
+std::string OsReason(int error_number) { return std::strerror(error_number); }
+
+// Writes all of `contents` to a new file `path`; returns 0 or the errno of the failure.
+int WriteWhole(const std::string& path, std::string_view contents) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return errno;
+  size_t done = 0;
+  int error_number = 0;
+  while (done < contents.size()) {
+    const ssize_t n = ::write(fd, contents.data() + done, contents.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      error_number = n < 0 ? errno : EIO;
+      break;
+    }
+    done += static_cast<size_t>(n);
+  }
+  // close() can report a delayed write error (NFS, quotas).
+  if (::close(fd) != 0 && error_number == 0) error_number = errno;
+  return error_number;
+}
+
+}  // namespace
 
 void WriteFileAtomicallyThrough(const std::string& path, const std::string& temp_path, std::string_view contents) {
   namespace fs = std::filesystem;
-  const fs::path target(path), temp(temp_path);
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error(path, "cannot create the temporary file " + temp.string());
-    out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
-    out.flush();
-    if (!out) {
-      std::error_code ignored;
-      fs::remove(temp, ignored);
-      throw Error(path, "write failed (disk full?)");
-    }
+  const int error_number = WriteWhole(temp_path, contents);
+  if (error_number != 0) {
+    std::error_code ignored;
+    fs::remove(temp_path, ignored);
+    throw EnvironmentError(path, "write failed (" + OsReason(error_number) + ")");
   }
   std::error_code ec;
-  fs::rename(temp, target, ec);
+  fs::rename(temp_path, path, ec);
   if (ec) {
     std::error_code ignored;
-    fs::remove(temp, ignored);
-    throw Error(path, "cannot rename into place (" + ec.message() + ")");
+    fs::remove(temp_path, ignored);
+    throw EnvironmentError(path, "cannot rename into place (" + ec.message() + ")");
   }
 }
 

@@ -3,15 +3,21 @@
 #include <OpenImageIO/imagecache.h>
 #include <OpenImageIO/imageio.h>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <mutex>
 #include <set>
 
 #include "platemeter/core/error.h"
 #include "platemeter/core/log.h"
+#include "image_jpeg_integrity.h"
 #include "tiff_integrity.h"
 
 namespace platemeter {
@@ -30,6 +36,12 @@ oiio::ImageCache* Cache() {
     created->attribute("max_open_files", defaults.max_open_files);
     // Keep tiles in the file's own type: a 16-bit scan costs 2 bytes a pixel in the cache.
     created->attribute("forcefloat", 0);
+    // OpenImageIO refuses to open any image whose decoded size exceeds its
+    // "limits:imagesize_MB" guard, meant for readers that hold the whole image.
+    // platemeter reads TIFF, JPEG and FITS by tiles or rows (the memory used is
+    // the cache's), so the guard is lifted here and applied by Image::Open only
+    // to the formats OpenImageIO decodes whole (WholeDecodeLimitMb).
+    oiio::attribute("limits:imagesize_MB", INT_MAX);
     return created;
   }();
   return cache;
@@ -60,6 +72,20 @@ void ToGrayDn(const Sample* samples, int channels, size_t count, float* values_d
   }
 }
 
+// Float samples that are no intensity (NaN, infinite, beyond kMaxPixelMagnitudeDn)
+// become NaN, the one marker of a masked pixel. The comparison is false for NaN.
+void MaskInvalid(float* values_dn, size_t count) {
+  constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+  constexpr float kMax = static_cast<float>(kMaxPixelMagnitudeDn);
+  for (size_t i = 0; i < count; ++i) {
+    if (!(std::abs(values_dn[i]) <= kMax)) values_dn[i] = kNan;
+  }
+}
+
+// Formats whose OpenImageIO reader decodes tiles, strips or rows on demand; any
+// other (PNG among them) decodes the whole image on the first pixel read.
+bool ReadsByParts(const std::string& format) { return format == "tiff" || format == "jpeg" || format == "fits"; }
+
 oiio::TypeDesc NativeType(SampleType type) {
   switch (type) {
     case SampleType::kUint8: return oiio::TypeDesc::UINT8;
@@ -85,6 +111,7 @@ void ReadNativeAsGray(SampleType type, int channels, size_t count, float* values
     std::vector<float> raw(samples);
     read(oiio::TypeDesc::FLOAT, raw.data());
     ToGrayDn(raw.data(), channels, count, values_dn);
+    MaskInvalid(values_dn, count);
   }
 }
 
@@ -95,6 +122,60 @@ std::optional<double> ResolutionToUm(const oiio::ImageSpec& spec, const char* ta
   if (unit == "in" || unit == "inch") return 25400.0 / resolution;
   if (unit == "cm") return 10000.0 / resolution;
   return std::nullopt;  // "none" or unknown: the tags carry no physical size
+}
+
+// Before the first pixel read: a format decoded whole must fit the limit.
+void CheckWholeDecodeSize(oiio::ustring name, const oiio::ImageSpec& spec, const std::string& path) {
+  oiio::ustring format;
+  Cache()->get_image_info(name, 0, 0, oiio::ustring("fileformat"), oiio::TypeString, &format);
+  if (ReadsByParts(format.string())) return;
+  const double decoded_mb = static_cast<double>(spec.image_bytes()) / (1024.0 * 1024.0);
+  const double limit_mb = WholeDecodeLimitMb();
+  if (decoded_mb <= limit_mb) return;
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "%ld x %ld px: OpenImageIO decodes a %s file whole, %.0f MB, more than the %.0f MB platemeter allows "
+                "(the smaller of 32 GB and the physical memory); convert it to a tiled TIFF, which is read tile by tile "
+                "(e.g. oiiotool SCAN --tile 512 512 -o SCAN.tif)",
+                static_cast<long>(spec.width), static_cast<long>(spec.height),
+                format.empty() ? "this" : format.c_str(), decoded_mb, limit_mb);
+  throw Error(path, text);
+}
+
+// A TIFF is read a strip or tile at a time. A strip (one holding the whole image included) must fit in
+// memory; a tile must fit in the tile cache, which holds whole tiles (OpenImageIO aborts on a tile far beyond
+// its memory limit).
+void CheckTiffBlockSize(const internal::TiffBlock& block, const std::string& path) {
+  float cache_mb = 0.0f;
+  Cache()->getattribute("max_memory_MB", cache_mb);
+  // A RowsPerStrip beyond the height is accepted while what the reader allocates for it is small (a small
+  // image written with a writer's usual strip height); a large one is a corrupt tag.
+  const double tag_mb = block.tag_rows * block.row_bytes / (1024.0 * 1024.0);
+  if (tag_mb > cache_mb) {
+    char text[300];
+    std::snprintf(text, sizeof text,
+                  "RowsPerStrip %.0f exceeds the image's height, and reading a strip would allocate %.0f MB for it "
+                  "(more than the image cache's %.0f MB): a corrupt tag",
+                  block.tag_rows, tag_mb, static_cast<double>(cache_mb));
+    throw Error(path, text);
+  }
+  const double block_mb = block.bytes / (1024.0 * 1024.0);
+  const double limit_mb = block.tiled ? static_cast<double>(cache_mb) : WholeDecodeLimitMb();
+  if (block_mb <= limit_mb) return;
+  char text[400];
+  if (block.tiled) {
+    std::snprintf(text, sizeof text,
+                  "one tile holds %.0f MB decoded, more than the image cache's %.0f MB (--cache-mb): a corrupt "
+                  "tile size, or rewrite it with smaller tiles (e.g. oiiotool SCAN --tile 512 512 -o SCAN.tif)",
+                  block_mb, limit_mb);
+  } else {
+    std::snprintf(text, sizeof text,
+                  "one strip holds %.0f MB decoded, more than the %.0f MB platemeter allows (the "
+                  "smaller of 32 GB and the physical memory); rewrite it tiled (e.g. oiiotool SCAN --tile 512 512 "
+                  "-o SCAN.tif)",
+                  block_mb, limit_mb);
+  }
+  throw Error(path, text);
 }
 
 }  // namespace
@@ -123,6 +204,18 @@ void ConfigureImageCache(const ImageCacheOptions& options) {
   Cache()->attribute("max_open_files", options.max_open_files);
 }
 
+size_t CountMaskedPixels(const float* values_dn, size_t count) {
+  size_t masked = 0;
+  for (size_t i = 0; i < count; ++i) masked += std::isnan(values_dn[i]) ? 1 : 0;
+  return masked;
+}
+
+double WholeDecodeLimitMb() {
+  const double physical_mb = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE)) /
+                             (1024.0 * 1024.0);
+  return physical_mb > 0.0 ? std::min(32768.0, physical_mb) : 32768.0;
+}
+
 double ImageCacheMemoryUsedMb() {
   long long bytes = 0;
   Cache()->getattribute("stat:cache_memory_used", oiio::TypeDesc::INT64, &bytes);
@@ -144,7 +237,12 @@ Image Image::Open(const std::string& path) {
   if (std::filesystem::is_directory(path, ec)) throw Error(path, "is a directory, not an image");
 
   if (internal::LooksLikeTiff(path)) {
-    const std::string problem = internal::TiffIntegrityProblem(path);
+    internal::TiffBlock block;
+    const std::string problem = internal::TiffIntegrityProblem(path, &block);
+    if (!problem.empty()) throw Error(path, problem);
+    CheckTiffBlockSize(block, path);
+  } else if (internal::LooksLikeJpeg(path)) {
+    const std::string problem = internal::JpegIntegrityProblem(path);
     if (!problem.empty()) throw Error(path, problem);
   }
 
@@ -202,6 +300,7 @@ Image Image::Open(const std::string& path) {
   }
   info.pixel_size_x_um = ResolutionToUm(spec, "XResolution");
   info.pixel_size_y_um = ResolutionToUm(spec, "YResolution");
+  CheckWholeDecodeSize(name, spec, path);
 
   // Probe the last pixel: it lies in the last tile or strip, which a truncated
   // file does not have.

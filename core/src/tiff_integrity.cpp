@@ -3,6 +3,7 @@
 #include <tiffio.h>
 
 #include <cstdarg>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -35,7 +36,7 @@ bool LooksLikeTiff(const std::string& path) {
   return little || big;
 }
 
-std::string TiffIntegrityProblem(const std::string& path) {
+std::string TiffIntegrityProblem(const std::string& path, TiffBlock* block) {
   std::string message;
   std::unique_ptr<TIFFOpenOptions, void (*)(TIFFOpenOptions*)> options(TIFFOpenOptionsAlloc(),
                                                                         TIFFOpenOptionsFree);
@@ -58,6 +59,22 @@ std::string TiffIntegrityProblem(const std::string& path) {
       problem = std::string(TIFFIsTiled(tiff) ? "tile " : "strip ") + std::to_string(strile) + " of " +
                 std::to_string(count) + " ends at byte " + std::to_string(offset + bytes) + " but the file has " +
                 std::to_string(file_bytes) + " bytes: the file is truncated";
+    }
+  }
+  if (block) {
+    block->tiled = TIFFIsTiled(tiff);
+    uint32_t rows_per_strip = 0;
+    if (block->tiled) {
+      block->bytes = static_cast<double>(TIFFTileSize64(tiff));
+    } else {
+      block->bytes = static_cast<double>(TIFFStripSize64(tiff));
+      uint32_t height = 0;
+      TIFFGetField(tiff, TIFFTAG_IMAGELENGTH, &height);
+      if (TIFFGetFieldDefaulted(tiff, TIFFTAG_ROWSPERSTRIP, &rows_per_strip) == 1 && rows_per_strip > height &&
+          rows_per_strip != UINT32_MAX) {
+        block->tag_rows = rows_per_strip;
+        block->row_bytes = static_cast<double>(TIFFScanlineSize64(tiff));
+      }
     }
   }
   TIFFClose(tiff);

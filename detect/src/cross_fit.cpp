@@ -85,8 +85,10 @@ class CrossCost : public ceres::CostFunction {
   double xc_, yc_;
 };
 
-// Pixels near the arms (within the start's uncertainty), plus a margin of background.
-std::vector<Sample> SelectSamples(const ImageWindow& window, const CrossFitStart& start, const CrossFitOptions& options) {
+// Pixels near the arms (within the start's uncertainty), plus a margin of background;
+// the region's masked pixels are left out and counted in *masked.
+std::vector<Sample> SelectSamples(const ImageWindow& window, const CrossFitStart& start, const CrossFitOptions& options,
+                                  int* masked) {
   const double c = std::cos(start.rotation_rad), sn = std::sin(start.rotation_rad);
   const double band = 0.5 * start.line_width_px + 4.0 * start.blur_sigma_px + options.margin_px + start.line_width_px;
   const double reach = 0.5 * start.arm_length_px + 4.0 * start.blur_sigma_px + options.margin_px;
@@ -97,9 +99,12 @@ std::vector<Sample> SelectSamples(const ImageWindow& window, const CrossFitStart
       const double u = c * dx + sn * dy, v = -sn * dx + c * dy;
       const bool on_u_arm = std::abs(v) <= band && std::abs(u) <= reach;
       const bool on_v_arm = std::abs(u) <= band && std::abs(v) <= reach;
+      if (!on_u_arm && !on_v_arm) continue;
       const float value = window.at(col, row);
-      if ((on_u_arm || on_v_arm) && std::isfinite(value)) {
+      if (std::isfinite(value)) {
         samples.push_back({static_cast<double>(col), static_cast<double>(row), static_cast<double>(value)});
+      } else {
+        ++*masked;
       }
     }
   }
@@ -158,6 +163,9 @@ bool CrossFitOptions::Check(std::string* why) const {
   if (!(max_outlier_fraction >= 0.0 && max_outlier_fraction < 1.0)) {
     return *why = "max_outlier_fraction must be in [0, 1)", false;
   }
+  if (!(max_masked_fraction >= 0.0 && max_masked_fraction < 1.0)) {
+    return *why = "max_masked_fraction must be in [0, 1)", false;
+  }
   if (max_iterations < 1) return *why = "max_iterations must be >= 1", false;
   return true;
 }
@@ -173,7 +181,15 @@ PixelRect CrossFitWindow(const CrossFitStart& start, const CrossFitOptions& opti
 
 CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, const CrossFitOptions& options) {
   CrossFitResult result;
-  std::vector<Sample> samples = SelectSamples(window, start, options);
+  std::vector<Sample> samples = SelectSamples(window, start, options, &result.pixels_masked);
+  const size_t region_px = samples.size() + static_cast<size_t>(result.pixels_masked);
+  result.masked_fraction = region_px > 0 ? static_cast<double>(result.pixels_masked) / static_cast<double>(region_px) : 0.0;
+  if (result.masked_fraction > options.max_masked_fraction) {
+    result.too_many_masked = true;
+    result.summary = std::to_string(result.pixels_masked) + " of the cross's " + std::to_string(region_px) +
+                     " px are masked (no value in the scan): too few left to fit it";
+    return result;
+  }
   if (samples.size() < 4 * kNumParams) {
     result.summary = "too few pixels around the cross to fit it";
     return result;
@@ -286,7 +302,9 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
   result.pixels_used = static_cast<int>(samples.size());
   std::ostringstream summary;
   summary << "fitted on " << samples.size() << " px (" << static_cast<int>(100.0 * result.outlier_fraction + 0.5)
-          << "% dropped as outliers), residual sigma " << result.residual_sigma_dn << " DN";
+          << "% dropped as outliers";
+  if (result.pixels_masked > 0) summary << ", " << result.pixels_masked << " masked left out";
+  summary << "), residual sigma " << result.residual_sigma_dn << " DN";
   result.summary = summary.str();
   return result;
 }

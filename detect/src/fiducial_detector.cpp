@@ -11,6 +11,8 @@
 #include "platemeter/core/error.h"
 #include "platemeter/detect/overview.h"
 
+#include "masked_pixels.h"
+
 namespace platemeter {
 namespace {
 
@@ -225,6 +227,7 @@ void MeasureOne(const Image& image, const Target& target, const PlateToPixel& ma
     return;
   }
   ImageWindow window = image.ReadWindow(search);
+  detect_internal::FillMaskedWithMedian(window.values_dn.data(), window.values_dn.size());
   const std::vector<Peak> peaks = FindPeaks(AsMat(window), templ, options.min_search_score, 1.0, 1);
   if (peaks.empty()) {
     point->reason = "not_found";
@@ -246,6 +249,11 @@ void MeasureOne(const Image& image, const Target& target, const PlateToPixel& ma
   *fit = FitMark(image.ReadWindow(fit_rect), start, options.fit);
   point->status = PointStatus::kRejected;
   point->position_px = start.centre_px;  // where the search found it
+  if (fit->too_many_masked) {
+    point->status = PointStatus::kMissing;  // the scan holds no values there
+    point->reason = "masked_pixels";
+    return;
+  }
   if (!fit->converged) {
     point->reason = "poor_fit";
     return;
@@ -326,7 +334,8 @@ std::string TemplateKey(const PixelShape& s) {
 
 // No prior: coarse candidates on an overview and a robust layout fit, one best hypothesis per orientation.
 std::vector<LayoutHypothesis> PlaceLayout(const Image& image, const std::vector<Target>& targets,
-                                          const FiducialDetectorOptions& options, int* candidate_count) {
+                                          const FiducialDetectorOptions& options, int* candidate_count,
+                                          long* masked_px) {
   const double nominal_px_per_mm = 1000.0 / options.pixel_size_um;
   const std::vector<ScanOrientation> orientations =
       options.orientation ? std::vector<ScanOrientation>{*options.orientation} : ScanOrientation::All();
@@ -358,6 +367,7 @@ std::vector<LayoutHypothesis> PlaceLayout(const Image& image, const std::vector<
   const int by_shape = std::min(static_cast<int>(std::floor(largest_px / 16.0)), static_cast<int>(std::floor(thinnest_px / 1.5)));
   const int factor = std::max({1, by_shape, static_cast<int>((long_side + 4095) / 4096)});
   const Overview overview = BuildOverview(image, factor);
+  *masked_px = overview.masked_px;
   // matchTemplate only reads its input: a header over the overview's own memory, no copy.
   const cv::Mat view(static_cast<int>(overview.height_px), static_cast<int>(overview.width_px), CV_32F,
                      const_cast<float*>(overview.values_dn.data()));
@@ -526,7 +536,7 @@ FiducialDetection DetectFiducialMarks(const Image& image, const CameraDefinition
   } else {
     if (!(options.pixel_size_um > 0.0))
       throw Error("fiducial detector options", "pixel_size_um is required to find fiducials without a prior");
-    const std::vector<LayoutHypothesis> hypotheses = PlaceLayout(image, targets, options, &result.candidates);
+    const std::vector<LayoutHypothesis> hypotheses = PlaceLayout(image, targets, options, &result.candidates, &result.masked_px);
     if (hypotheses.empty() || hypotheses[0].matched < 2) {
       result.summary = "the fiducial layout could not be placed (" + std::to_string(result.candidates) + " candidates)";
       for (size_t t = 0; t < targets.size(); ++t) {

@@ -225,6 +225,9 @@ MarkFitResult FromCross(const CrossFitResult& fit) {
   r.background_dn = fit.background_dn;
   r.residual_sigma_dn = fit.residual_sigma_dn;
   r.outlier_fraction = fit.outlier_fraction;
+  r.pixels_masked = fit.pixels_masked;
+  r.masked_fraction = fit.masked_fraction;
+  r.too_many_masked = fit.too_many_masked;
   r.pixels_used = fit.pixels_used;
   r.summary = fit.summary;
   return r;
@@ -237,6 +240,7 @@ CrossFitOptions CrossOptions(const MarkFitOptions& options) {
   c.outlier_threshold = options.outlier_threshold;
   c.min_outlier_contrast = options.min_outlier_contrast;
   c.max_outlier_fraction = options.max_outlier_fraction;
+  c.max_masked_fraction = options.max_masked_fraction;
   c.max_iterations = options.max_iterations;
   return c;
 }
@@ -260,6 +264,8 @@ bool MarkFitOptions::Check(std::string* why) const {
   if (!(min_outlier_contrast >= 0.0)) return *why = "min_outlier_contrast must be >= 0", false;
   if (!(max_outlier_fraction >= 0.0 && max_outlier_fraction < 1.0))
     return *why = "max_outlier_fraction must be in [0, 1)", false;
+  if (!(max_masked_fraction >= 0.0 && max_masked_fraction < 1.0))
+    return *why = "max_masked_fraction must be in [0, 1)", false;
   if (!(max_corner_arm_px > 0.0)) return *why = "max_corner_arm_px must be > 0", false;
   if (max_iterations < 1) return *why = "max_iterations must be >= 1", false;
   return true;
@@ -316,9 +322,13 @@ MarkFitResult FitMark(const ImageWindow& window, const MarkFitStart& start, cons
   auto add_pixels = [&](auto&& keep) {
     for (long row = window.rect.y0_px; row < window.rect.y_end_px(); ++row)
       for (long col = window.rect.x0_px; col < window.rect.x_end_px(); ++col) {
+        if (!keep(col - cx, row - cy)) continue;
         const float value = window.at(col, row);
-        if (std::isfinite(value) && keep(col - cx, row - cy))
+        if (std::isfinite(value)) {
           samples.push_back({static_cast<double>(col), static_cast<double>(row), static_cast<double>(value)});
+        } else {
+          ++result.pixels_masked;  // no value in the scan: left out
+        }
       }
   };
   const double blur_cap = 2.0 * std::max(w, 0.15 * size) + 3.0;
@@ -364,6 +374,14 @@ MarkFitResult FitMark(const ImageWindow& window, const MarkFitStart& start, cons
     if (options.quadratic_corner_background) settings.background_terms = 6;
   }
 
+  const size_t region_px = samples.size() + static_cast<size_t>(result.pixels_masked);
+  result.masked_fraction = region_px > 0 ? static_cast<double>(result.pixels_masked) / static_cast<double>(region_px) : 0.0;
+  if (result.masked_fraction > options.max_masked_fraction) {
+    result.too_many_masked = true;
+    result.summary = std::to_string(result.pixels_masked) + " of the " + MarkTypeName(start.type) + "'s " +
+                     std::to_string(region_px) + " px are masked (no value in the scan): too few left to fit it";
+    return result;
+  }
   const internal::MarkEngineResult fit = internal::RunMarkFit(*model, std::move(samples), settings);
   result.outlier_fraction = fit.outlier_fraction;
   if (!fit.converged) {
@@ -401,8 +419,9 @@ MarkFitResult FitMark(const ImageWindow& window, const MarkFitStart& start, cons
   result.pixels_used = fit.pixels_used;
   std::ostringstream summary;
   summary << MarkTypeName(start.type) << " fitted on " << fit.pixels_used << " px ("
-          << static_cast<int>(100.0 * fit.outlier_fraction + 0.5) << "% dropped as outliers), residual sigma "
-          << fit.sigma0_dn << " DN";
+          << static_cast<int>(100.0 * fit.outlier_fraction + 0.5) << "% dropped as outliers";
+  if (result.pixels_masked > 0) summary << ", " << result.pixels_masked << " masked left out";
+  summary << "), residual sigma " << fit.sigma0_dn << " DN";
   result.summary = summary.str();
   return result;
 }

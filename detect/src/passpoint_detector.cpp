@@ -8,6 +8,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "masked_pixels.h"
 #include "passpoint_internal.h"
 #include "platemeter/core/error.h"
 
@@ -36,6 +37,10 @@ PasspointPoint FromFit(const CandidateFit& c, double score) {
   if (c.clipped) p.flags.push_back("clipped");
   p.point.status = c.is_mark && c.reason.empty() ? PointStatus::kMeasured : PointStatus::kRejected;
   p.point.reason = c.is_mark ? c.reason : "poor_fit";
+  if (c.fit.too_many_masked) {  // the scan holds no values there
+    p.point.status = PointStatus::kMissing;
+    p.point.reason = "masked_pixels";
+  }
   return p;
 }
 
@@ -67,6 +72,7 @@ PasspointPoint MeasureListed(const Image& image, const PasspointDetectorOptions&
   missing.point.reason = "not_found";
   if (search.width_px < templ.image.cols || search.height_px < templ.image.rows) return missing;
   ImageWindow window = image.ReadWindow(search);
+  detect_internal::FillMaskedWithMedian(window.values_dn.data(), window.values_dn.size());
   const cv::Mat view(static_cast<int>(search.height_px), static_cast<int>(search.width_px), CV_32F,
                      window.values_dn.data());
   std::vector<PasspointPeak> peaks;

@@ -26,6 +26,10 @@ CandidateFit FitPasspointCandidate(const Image& image, const PasspointDetectorOp
   }
   c.fit = FitMark(image.ReadWindow(rect), s, options.fit);
   const MarkFitResult& f = c.fit;
+  if (f.too_many_masked) {
+    c.reason = "masked_pixels";  // the scan holds no values there
+    return c;
+  }
   if (!f.converged) {
     c.reason = "not_converged";
     return c;

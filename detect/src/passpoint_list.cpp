@@ -8,10 +8,14 @@
 #include <sstream>
 
 #include "platemeter/core/error.h"
+#include "platemeter/core/text_input.h"
 #include "platemeter/detect/passpoint_detector.h"
 
 namespace platemeter {
 namespace {
+
+// Scan positions as the measurement file accepts them (docs/passpoints.md).
+constexpr NumberRange kScanPx{-1e7, 1e7, "px"};
 
 std::string Trim(const std::string& s) {
   const size_t b = s.find_first_not_of(" \t\r");
@@ -42,7 +46,7 @@ std::vector<ApproximatePasspoint> ParsePasspointList(const std::string& text, co
   std::vector<ApproximatePasspoint> list;
   std::set<std::string> ids;
   bool header = false;
-  std::stringstream in(text);
+  std::stringstream in{std::string(WithoutUtf8Bom(text))};
   int number = 0;
   for (std::string raw; std::getline(in, raw);) {
     ++number;
@@ -61,10 +65,14 @@ std::vector<ApproximatePasspoint> ParsePasspointList(const std::string& text, co
     ApproximatePasspoint p;
     p.id = fields[0];
     if (p.id.empty()) throw Error(origin, where + "empty id");
+    // The id goes into the measurement file and micmac.xml.
+    if (const std::string why = TextFieldProblem(p.id); !why.empty()) throw Error(origin, where + "the id " + why);
     if (!ParseNumber(fields[1], &p.position_px.x_px))
       throw Error(origin, where + "x_px '" + fields[1] + "' is not a number");
     if (!ParseNumber(fields[2], &p.position_px.y_px))
       throw Error(origin, where + "y_px '" + fields[2] + "' is not a number");
+    if (!kScanPx.Contains(p.position_px.x_px)) throw Error(origin, where + "x_px " + OutsideRange(fields[1], kScanPx));
+    if (!kScanPx.Contains(p.position_px.y_px)) throw Error(origin, where + "y_px " + OutsideRange(fields[2], kScanPx));
     if (!ids.insert(p.id).second) throw Error(origin, where + "duplicate id '" + p.id + "'");
     list.push_back(p);
   }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "masked_pixels.h"
 #include "passpoint_internal.h"
 
 namespace platemeter::internal {
@@ -153,7 +154,8 @@ std::vector<PasspointPeak> SearchWholeScan(const Image& image, const PasspointDe
     const long y1 = std::min(bounds.height_px, core.y_end_px() + overlap);
     const long bw = (x1 - x0) / factor, bh = (y1 - y0) / factor;
     if (bw < templ.image.cols || bh < templ.image.rows) return;
-    const ImageWindow window = image.ReadWindow({x0, y0, bw * factor, bh * factor});
+    ImageWindow window = image.ReadWindow({x0, y0, bw * factor, bh * factor});
+    detect_internal::FillMaskedWithMedian(window.values_dn.data(), window.values_dn.size());
     cv::Mat blocks(static_cast<int>(bh), static_cast<int>(bw), CV_32F);
     if (factor == 1) {
       std::copy(window.values_dn.begin(), window.values_dn.end(), blocks.ptr<float>(0));

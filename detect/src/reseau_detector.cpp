@@ -44,6 +44,11 @@ void RefineOne(const Image& image, const CrossFitStart& start, const ReseauDetec
     return;
   }
   *fit = FitCross(image.ReadWindow(window_rect), start, options.fit);
+  if (fit->too_many_masked) {
+    point->status = PointStatus::kMissing;  // the scan holds no values there
+    point->reason = "masked_pixels";
+    return;
+  }
   if (!fit->converged) {
     point->status = PointStatus::kMissing;
     point->reason = "poor_fit";
@@ -234,6 +239,7 @@ ReseauDetection DetectReseau(const Image& image, const MasterGrid& grid, const R
   result.overview_factor = OverviewFactorFor(options.candidates.line_width_px,
                                              std::max(image.info().width_px, image.info().height_px));
   const Overview overview = BuildOverview(image, result.overview_factor);
+  result.masked_px = overview.masked_px;
   result.seconds_overview = SecondsSince(clock);
 
   clock = std::chrono::steady_clock::now();

@@ -28,6 +28,7 @@ bool ReadContrast(const ScanPixels& scan, const PixelRect& rect, std::vector<sta
   for (long y = 0; y < rect.height_px; ++y)
     for (long x = 0; x < rect.width_px; ++x) {
       const float v = values[static_cast<size_t>(y * rect.width_px + x)];
+      if (std::isnan(v)) continue;  // masked: no value in the scan, simply not used
       const double x_px = static_cast<double>(rect.x0_px + x), y_px = static_cast<double>(rect.y0_px + y);
       if (v <= scan.low_dn || v >= scan.high_dn) {
         if (!clipped) return false;

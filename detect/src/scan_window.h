@@ -16,7 +16,7 @@ bool WindowAbout(const ScanPixels& scan, const PixelPoint& centre, double half_p
 
 // The window's pixels, their values as contrast (negated on a negative). A clipped pixel (saturated, or at
 // the film's floor) holds light not measured, which a fit would take for less: without `clipped`, false at
-// the first; with it, each is left out and listed there.
+// the first; with it, each is left out and listed there. Masked pixels (core/image.h) are left out silently.
 bool ReadContrast(const ScanPixels& scan, const PixelRect& rect, std::vector<star_internal::FitPixel>* pixels,
                   std::vector<PixelPoint>* clipped = nullptr);
 

@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "platemeter/core/error.h"
+#include "masked_pixels.h"
 #include "star_internal.h"
 
 namespace platemeter {
@@ -107,7 +108,7 @@ DetectedStar MeasuredImage(double x_px, double y_px, double sigma_x_px, double s
   return d;
 }
 
-// A rejected image; `why` (line, cross, masked, shape) becomes its reason, the flag says defect.
+// A rejected image; `why` (line, cross, masked: near a known cross, masked_pixels: no values, shape) becomes its reason, the flag says defect.
 DetectedStar Defect(double x, double y, const std::string& why) {
   DetectedStar d;
   d.point.kind = PointKind::kStar;
@@ -267,6 +268,7 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
     std::vector<float> level(b.width);
     mesh.LevelRow(y, b.width, level.data());
     for (long x = 0; x < b.width; ++x) c[x] = static_cast<float>(sign * (r[x] - level[x]));
+    detect_internal::FillMasked(c, static_cast<size_t>(b.width), 0.0f);  // no value: the background's, to the filter
   });
   // Matched filter: a Gaussian of the PSF's sigma; its noise is sigma * sum(w^2)^(1/2).
   const int ksize = 2 * static_cast<int>(std::ceil(3.0 * psf_sigma)) + 1;
@@ -403,7 +405,7 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
     if (y0 < 0) { y0 = 0; truncated = truncated || b.y0_abs == 0; }
     if (y1 > b.rows) { y1 = static_cast<int>(b.rows); truncated = truncated || b.y0_abs + b.rows == b.image_height; }
     std::vector<FitPixel> pixels;
-    int clipped = 0;
+    int clipped = 0, masked_px = 0;
     double peak_contrast = 0;
     for (int y = y0; y < y1; ++y)
       for (int x = x0; x < x1; ++x) {
@@ -411,6 +413,10 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
         if (lab != 0 && lab != l) continue;  // another component's pixels
         if (!near_crosses.empty() && on_arm(x, b.y0_abs + y)) continue;
         const float raw = b.raw[long(y) * b.width + x];
+        if (std::isnan(raw)) {  // masked: no value in the scan
+          ++masked_px;
+          continue;
+        }
         if (raw >= b.high_dn || raw <= b.low_dn) {
           ++clipped;
           continue;
@@ -419,6 +425,10 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
         if (lab == l) peak_contrast = std::max<double>(peak_contrast, c);
         pixels.push_back({float(x), float(b.y0_abs + y), c});
       }
+    if (masked_px > o.max_masked_fraction * (pixels.size() + clipped + masked_px)) {
+      result.push_back(Defect(px, peak_y_abs, "masked_pixels"));
+      return;
+    }
     const double noise = std::max(1e-3f, mesh.SigmaAt(px, py));
     if (dash_mode) {
       // A sweep clearly longer than the PSF: fitted as a segment (dash, long dot), not as a star.
@@ -596,6 +606,7 @@ bool StarDetectorOptions::Check(std::string* why) const {
   if (!(psf_fwhm_px >= 0.8 && psf_fwhm_px <= 50)) return fail("psf_fwhm_px must be 0.8..50");
   if (mesh_px < 8) return fail("mesh_px must be at least 8");
   if (!(clip_sigma > 1)) return fail("clip_sigma must exceed 1");
+  if (!(max_masked_fraction >= 0 && max_masked_fraction < 1)) return fail("max_masked_fraction must be in [0, 1)");
   if (!(threshold_sigma > 0)) return fail("threshold_sigma must be positive");
   if (min_pixels < 1) return fail("min_pixels must be at least 1");
   if (band_rows < 16) return fail("band_rows must be at least 16");

@@ -1,17 +1,20 @@
 // Reads the TOML definition format (docs/definitions.md) into plain structs.
 // Every problem is an Error "<file>: line N: <definition>: <problem>", and
 // every key a table does not know is an error, so a typo never passes silently.
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <toml++/toml.h>
 
 #include "platemeter/core/error.h"
+#include "platemeter/core/text_input.h"
 #include "platemeter/grids/definition_io.h"
+#include "definition_table_reader.h"
 #include "platemeter/grids/lens_models.h"
 
 namespace platemeter {
@@ -25,130 +28,31 @@ double MillimetresFromMicrometres(double value_um) {
   return std::strtod(text, nullptr);
 }
 
-int LineOf(const toml::node& node) { return static_cast<int>(node.source().begin.line); }
+using definition_toml::LineOf;
+using definition_toml::TableReader;
 
-// Reads the keys of one TOML table and remembers which ones were used, so the
-// rest can be reported as unknown.
-class TableReader {
- public:
-  TableReader(const toml::table& table, const std::string& origin, std::string what)
-      : table_(table), origin_(origin), what_(std::move(what)) {}
-
-  [[noreturn]] void Fail(int line, const std::string& problem) const {
-    std::string reason;
-    if (line > 0) reason = "line " + std::to_string(line) + ": ";
-    if (!what_.empty()) reason += what_ + ": ";
-    throw Error(origin_, reason + problem);
-  }
-  [[noreturn]] void Fail(const toml::node* node, const std::string& problem) const {
-    Fail(node ? LineOf(*node) : LineOf(table_), problem);
-  }
-
-  void SetWhat(std::string what) { what_ = std::move(what); }
-  int line() const { return LineOf(table_); }
-
-  const toml::node* Get(const std::string& key) {
-    used_.insert(key);
-    return table_.get(key);
-  }
-  bool Has(const std::string& key) const { return table_.contains(key); }
-
-  std::string RequireString(const std::string& key) {
-    const toml::node* node = Get(key);
-    if (!node) Fail(line(), "missing required key '" + key + "' (a string)");
-    return AsString(node, key);
-  }
-  std::string OptionalString(const std::string& key) {
-    const toml::node* node = Get(key);
-    return node ? AsString(node, key) : std::string();
-  }
-  std::string AsString(const toml::node* node, const std::string& key) const {
-    if (!node->is_string()) Fail(node, "key '" + key + "' must be a string");
-    return node->as_string()->get();
-  }
-
-  double RequireNumber(const std::string& key) {
-    const toml::node* node = Get(key);
-    if (!node) Fail(line(), "missing required key '" + key + "' (a number)");
-    return AsNumber(node, "key '" + key + "'");
-  }
-  std::optional<double> OptionalNumber(const std::string& key) {
-    const toml::node* node = Get(key);
-    if (!node) return std::nullopt;
-    return AsNumber(node, "key '" + key + "'");
-  }
-  // Integers are accepted where a number is expected (x = 0 means 0.0).
-  double AsNumber(const toml::node* node, const std::string& name) const {
-    double value = 0.0;
-    if (node->is_floating_point()) {
-      value = node->as_floating_point()->get();
-    } else if (node->is_integer()) {
-      value = static_cast<double>(node->as_integer()->get());
-    } else {
-      Fail(node, name + " must be a number");
-    }
-    if (!std::isfinite(value)) Fail(node, name + " must be a finite number");
-    return value;
-  }
-
-  int RequireCount(const std::string& key) {
-    const toml::node* node = Get(key);
-    if (!node) Fail(line(), "missing required key '" + key + "' (a positive integer)");
-    if (!node->is_integer()) Fail(node, "key '" + key + "' must be an integer");
-    const int64_t value = node->as_integer()->get();
-    if (value < 1 || value > 100000) Fail(node, "key '" + key + "' must be between 1 and 100000");
-    return static_cast<int>(value);
-  }
-
-  bool OptionalBool(const std::string& key, bool fallback) {
-    const toml::node* node = Get(key);
-    if (!node) return fallback;
-    if (!node->is_boolean()) Fail(node, "key '" + key + "' must be true or false");
-    return node->as_boolean()->get();
-  }
-
-  const toml::table* OptionalTable(const std::string& key) {
-    const toml::node* node = Get(key);
-    if (!node) return nullptr;
-    if (!node->is_table()) Fail(node, "key '" + key + "' must be a table");
-    return node->as_table();
-  }
-  const toml::table& RequireTable(const std::string& key) {
-    if (!Has(key)) Fail(line(), "missing required table '" + key + "'");
-    return *OptionalTable(key);
-  }
-  const toml::array* OptionalArray(const std::string& key) {
-    const toml::node* node = Get(key);
-    if (!node) return nullptr;
-    if (!node->is_array()) Fail(node, "key '" + key + "' must be an array");
-    return node->as_array();
-  }
-
-  void RejectUnknownKeys() const {
-    for (auto&& [key, node] : table_) {
-      const std::string name(key.str());
-      if (used_.count(name)) continue;
-      const int line = key.source().begin.line > 0 ? static_cast<int>(key.source().begin.line) : LineOf(node);
-      Fail(line, "unknown key '" + name + "'");
-    }
-  }
-
-  const std::string& origin() const { return origin_; }
-  const std::string& what() const { return what_; }
-
- private:
-  const toml::table& table_;
-  const std::string& origin_;
-  std::string what_;
-  std::set<std::string> used_;
-};
+// Accepted ranges (docs/definitions.md, "Accepted ranges"): every real plate
+// camera fits well inside them; they keep products of the values finite.
+constexpr NumberRange kPlateMm{-1000.0, 1000.0, "mm"};           // point and principal point coordinates
+constexpr NumberRange kFormatMm{0.0, 1000.0, "mm"};              // format sides, > 0
+constexpr NumberRange kSpacingMm{0.01, 1000.0, "mm"};            // lattice spacing
+constexpr NumberRange kPrincipalDistanceMm{0.0, 25000.0, "mm"};  // > 0; the longest astrographs are ~20 m
+constexpr NumberRange kLineWidthUm{0.0, 1e4, "um"};              // > 0
+constexpr NumberRange kArmLengthUm{0.0, 1e5, "um"};              // > 0
+constexpr NumberRange kTemperatureDegC{-100.0, 100.0, "degC"};   // as the job file's temperature_degC
 
 // Definition names appear on command lines and in file names: keep them plain.
 void CheckName(TableReader& reader, const std::string& kind) {
   const std::string name = reader.RequireString("name");
-  static const std::regex pattern("[A-Za-z0-9][A-Za-z0-9._-]*");
-  if (!std::regex_match(name, pattern)) {
-    reader.Fail(reader.Get("name"), "name '" + name + "' must be letters, digits, '.', '_' or '-'");
+  // A loop, not std::regex: libstdc++'s matcher recurses per character and
+  // overflows the stack on a name of some thousand characters (fuzz finding).
+  const auto plain = [](char c, bool first) {
+    return std::isalnum(static_cast<unsigned char>(c)) || (!first && (c == '.' || c == '_' || c == '-'));
+  };
+  bool ok = !name.empty() && name.size() <= 256;
+  for (size_t i = 0; ok && i < name.size(); ++i) ok = plain(name[i], i == 0);
+  if (!ok) {
+    reader.Fail(reader.Get("name"), "name '" + name + "' must be letters, digits, '.', '_' or '-' (at most 256)");
   }
   reader.SetWhat(kind + " '" + name + "'");
 }
@@ -173,8 +77,24 @@ MarkShape ReadMark(const toml::table& table, const TableReader& parent) {
   mark.arm_length_um = reader.RequireNumber("arm_length_um");
   if (mark.line_width_um <= 0.0) reader.Fail(reader.Get("line_width_um"), "line_width_um must be > 0");
   if (mark.arm_length_um <= 0.0) reader.Fail(reader.Get("arm_length_um"), "arm_length_um must be > 0");
+  reader.InRange(reader.Get("line_width_um"), "key 'line_width_um'", mark.line_width_um, kLineWidthUm);
+  reader.InRange(reader.Get("arm_length_um"), "key 'arm_length_um'", mark.arm_length_um, kArmLengthUm);
   reader.RejectUnknownKeys();
   return mark;
+}
+
+// X{i}Y{j} with i, j in 1..999999 without leading zeros.
+bool ParseReseauId(const std::string& id, int* i, int* j) {
+  size_t at = 0;
+  const auto number = [&](char letter, int* value) {
+    if (at >= id.size() || id[at] != letter) return false;
+    const size_t begin = ++at;
+    while (at < id.size() && at - begin < 7 && std::isdigit(static_cast<unsigned char>(id[at]))) ++at;
+    if (at == begin || at - begin > 6 || id[begin] == '0') return false;
+    *value = std::stoi(id.substr(begin, at - begin));
+    return true;
+  };
+  return number('X', i) && number('Y', j) && at == id.size();
 }
 
 struct RawPoint {
@@ -196,14 +116,16 @@ std::vector<RawPoint> ReadPoints(const toml::array& array, const TableReader& pa
         parent.Fail(&node, "a point must be [\"id\", x_mm, y_mm]");
       }
       point.id = (*row)[0].as_string()->get();
-      point.x_mm = parent.AsNumber(row->get(1), "x_mm of point '" + point.id + "'");
-      point.y_mm = parent.AsNumber(row->get(2), "y_mm of point '" + point.id + "'");
+      point.x_mm = parent.InRange(row->get(1), "x_mm of point '" + point.id + "'",
+                                  parent.AsNumber(row->get(1), "x_mm of point '" + point.id + "'"), kPlateMm);
+      point.y_mm = parent.InRange(row->get(2), "y_mm of point '" + point.id + "'",
+                                  parent.AsNumber(row->get(2), "y_mm of point '" + point.id + "'"), kPlateMm);
     } else if (const toml::table* table = node.as_table()) {
       TableReader reader(*table, parent.origin(), parent.what() + ": point");
       point.id = reader.RequireString("id");
       reader.SetWhat(parent.what() + ": point '" + point.id + "'");
-      point.x_mm = reader.RequireNumber("x_mm");
-      point.y_mm = reader.RequireNumber("y_mm");
+      point.x_mm = reader.RequireNumber("x_mm", kPlateMm);
+      point.y_mm = reader.RequireNumber("y_mm", kPlateMm);
       if (allow_mark) {
         if (const toml::table* mark = reader.OptionalTable("mark")) point.mark = ReadMark(*mark, reader);
       }
@@ -233,7 +155,7 @@ MasterGrid ReadGrid(const toml::table& table, const std::string& origin) {
   Common(reader, &grid.description, &grid.source);
   grid.columns = reader.RequireCount("columns");
   grid.rows = reader.RequireCount("rows");
-  grid.calibration_temperature_degC = reader.OptionalNumber("calibration_temperature_degC");
+  grid.calibration_temperature_degC = reader.OptionalNumber("calibration_temperature_degC", kTemperatureDegC);
   grid.mark = ReadMark(reader.RequireTable("mark"), reader);
 
   const toml::array* points = reader.OptionalArray("points");
@@ -242,6 +164,12 @@ MasterGrid ReadGrid(const toml::table& table, const std::string& origin) {
   if (!points && !spacing_mm) reader.Fail(reader.line(), "missing 'points' (a list) or 'spacing_mm' (a lattice)");
   if (spacing_mm) {
     if (*spacing_mm <= 0.0) reader.Fail(reader.Get("spacing_mm"), "spacing_mm must be > 0");
+    reader.InRange(reader.Get("spacing_mm"), "key 'spacing_mm'", *spacing_mm, kSpacingMm);
+    const double half_extent_mm = 0.5 * (std::max(grid.columns, grid.rows) - 1) * *spacing_mm;
+    if (!kPlateMm.Contains(half_extent_mm)) {
+      reader.Fail(reader.Get("spacing_mm"), "the lattice reaches " + ShortNumber(half_extent_mm) +
+                                                " mm from its centre, outside the accepted range " + kPlateMm.Describe());
+    }
     if (static_cast<int64_t>(grid.columns) * grid.rows > 1000000) {
       reader.Fail(reader.Get("spacing_mm"), "a lattice of more than 1000000 crosses is not a reseau");
     }
@@ -254,13 +182,11 @@ MasterGrid ReadGrid(const toml::table& table, const std::string& origin) {
       }
     }
   } else {
-    static const std::regex reseau_id("X([1-9][0-9]{0,5})Y([1-9][0-9]{0,5})");
     for (const RawPoint& point : ReadPoints(*points, reader, false)) {
-      std::smatch match;
-      if (!std::regex_match(point.id, match, reseau_id)) {
+      int i = 0, j = 0;
+      if (!ParseReseauId(point.id, &i, &j)) {
         reader.Fail(point.node, "reseau id '" + point.id + "' is not of the form X{i}Y{j}");
       }
-      const int i = std::stoi(match[1]), j = std::stoi(match[2]);
       if (i > grid.columns || j > grid.rows) {
         reader.Fail(point.node, "reseau id '" + point.id + "' is outside the " + std::to_string(grid.columns) +
                                     " columns x " + std::to_string(grid.rows) + " rows");
@@ -290,6 +216,28 @@ FiducialSet ReadFiducialSet(const toml::table& table, const std::string& origin)
   return set;
 }
 
+// A lens coefficient's range by its unit suffix (docs/definitions.md): angles
+// one turn, a point of symmetry within the plate, dimensionless scale terms
+// within +-1; polynomial coefficients within +-1e12 (real ones are many
+// orders smaller; the bound keeps K r^6 finite for r up to 1 m).
+NumberRange CoefficientRange(const std::string& key) {
+  if (key.ends_with("_deg")) return {-360.0, 360.0, "deg"};
+  if (key.ends_with("_rad")) return {-6.283185307179586, 6.283185307179586, "rad"};
+  if (key.ends_with("_um")) return {kPlateMm.min * 1000.0, kPlateMm.max * 1000.0, "um"};
+  if (key.find("_per_") == std::string::npos) return {-1.0, 1.0, ""};
+  return {-1e12, 1e12, ""};  // the unit is in the key (K1_per_mm2)
+}
+
+// A sigma is at most the largest magnitude its value may have.
+NumberRange SigmaRange(const std::string& key) {
+  if (key.rfind("principal_distance", 0) == 0 || key.rfind("principal_point", 0) == 0) {
+    const double max_mm = key.rfind("principal_distance", 0) == 0 ? kPrincipalDistanceMm.max : kPlateMm.max;
+    return key.ends_with("_um") ? NumberRange{0.0, max_mm * 1000.0, "um"} : NumberRange{0.0, max_mm, "mm"};
+  }
+  const NumberRange value = CoefficientRange(key);
+  return {0.0, value.max, value.unit};
+}
+
 LensCalibration ReadLens(const toml::table& table, const TableReader& camera) {
   TableReader reader(table, camera.origin(), camera.what() + ": lens");
   LensCalibration lens;
@@ -306,7 +254,10 @@ LensCalibration ReadLens(const toml::table& table, const TableReader& camera) {
     const bool mm = reader.Has(stem + "_mm"), um = reader.Has(stem + "_um");
     if (mm && um) reader.Fail(reader.Get(stem + "_um"), "give " + stem + "_mm or " + stem + "_um, not both");
     if (!mm && !um) reader.Fail(reader.line(), "missing required key '" + stem + "_mm' (or '" + stem + "_um')");
-    *value_mm = mm ? reader.RequireNumber(stem + "_mm") : MillimetresFromMicrometres(reader.RequireNumber(stem + "_um"));
+    const NumberRange range_mm = stem == "principal_distance" ? kPrincipalDistanceMm : kPlateMm;
+    const NumberRange range_um{range_mm.min * 1000.0, range_mm.max * 1000.0, "um"};
+    *value_mm = mm ? reader.RequireNumber(stem + "_mm", range_mm)
+                   : MillimetresFromMicrometres(reader.RequireNumber(stem + "_um", range_um));
     sigma_key_to_struct_key[stem + (mm ? "_mm" : "_um")] = stem + "_mm";
   };
   read_length("principal_distance", &lens.principal_distance_mm);
@@ -332,7 +283,7 @@ LensCalibration ReadLens(const toml::table& table, const TableReader& camera) {
       coefficient_reader.Fail(coefficient_reader.line(), "missing '" + c.key + "' (" + c.meaning + ") for model " +
                                                              lens.model);
     }
-    lens.coefficients[c.key] = coefficient_reader.RequireNumber(c.key);
+    lens.coefficients[c.key] = coefficient_reader.RequireNumber(c.key, CoefficientRange(c.key));
   }
 
   if (const toml::table* sigmas = reader.OptionalTable("sigmas")) {
@@ -341,6 +292,7 @@ LensCalibration ReadLens(const toml::table& table, const TableReader& camera) {
       const std::string name(key.str());
       double sigma = sigma_reader.AsNumber(&node, "sigma '" + name + "'");
       if (sigma < 0.0) sigma_reader.Fail(&node, "sigma '" + name + "' must be >= 0");
+      sigma_reader.InRange(&node, "sigma '" + name + "'", sigma, SigmaRange(name));
       std::string stored = name;
       if (auto it = sigma_key_to_struct_key.find(name); it != sigma_key_to_struct_key.end()) {
         stored = it->second;
@@ -362,18 +314,18 @@ CameraDefinition ReadCamera(const toml::table& table, const std::string& origin)
   CameraDefinition camera;
   camera.name = reader.RequireString("name");
   Common(reader, &camera.description, &camera.source);
-  auto positive = [&](const std::string& key) {
+  auto positive = [&](const std::string& key, const NumberRange& range) {
     const double value = reader.RequireNumber(key);
     if (value <= 0.0) reader.Fail(reader.Get(key), key + " must be > 0");
-    return value;
+    return reader.InRange(reader.Get(key), "key '" + key + "'", value, range);
   };
-  camera.format_width_mm = positive("format_width_mm");
-  camera.format_height_mm = positive("format_height_mm");
-  camera.nominal_principal_distance_mm = positive("nominal_principal_distance_mm");
+  camera.format_width_mm = positive("format_width_mm", kFormatMm);
+  camera.format_height_mm = positive("format_height_mm", kFormatMm);
+  camera.nominal_principal_distance_mm = positive("nominal_principal_distance_mm", kPrincipalDistanceMm);
   camera.grid = reader.OptionalString("grid");
   camera.fiducial_set = reader.OptionalString("fiducial_set");
   camera.format_corners_as_fiducials = reader.OptionalBool("format_corners_as_fiducials", false);
-  camera.calibration_temperature_degC = reader.OptionalNumber("calibration_temperature_degC");
+  camera.calibration_temperature_degC = reader.OptionalNumber("calibration_temperature_degC", kTemperatureDegC);
   if (const std::optional<double> expansion = reader.OptionalNumber("glass_expansion_per_degC")) {
     if (*expansion < 0.0 || *expansion > 1e-3) {
       reader.Fail(reader.Get("glass_expansion_per_degC"), "glass_expansion_per_degC must be in [0, 1e-3]");

@@ -13,9 +13,10 @@ double EmulsionDepthModel::RadialShiftMm(double r_mm) const {
 
 double EmulsionDepthModel::RadialShiftDerivative(double r_mm) const {
   const double n = refractive_index, c = principal_distance_mm, d_mm = depth_um * 1e-3;
-  const double s = r_mm / std::hypot(r_mm, c);
-  // d/ds [s / sqrt(n^2 - s^2)] = n^2 / (n^2 - s^2)^1.5;  ds/dr = c^2 / (r^2 + c^2)^1.5.
-  return d_mm * n * n / std::pow(n * n - s * s, 1.5) * c * c / std::pow(r_mm * r_mm + c * c, 1.5);
+  const double h = std::hypot(r_mm, c), s = r_mm / h, cos_theta = c / h;
+  // d/ds [s / sqrt(n^2 - s^2)] = n^2 / (n^2 - s^2)^1.5;  ds/dr = c^2 / (r^2 + c^2)^1.5 = cos^3(theta) / c
+  // (the second form stays finite for any c: c^2 overflows above 1e154 mm).
+  return d_mm * n * n / std::pow(n * n - s * s, 1.5) * cos_theta * cos_theta * cos_theta / c;
 }
 
 double EmulsionDepthModel::TrueRadiusMm(double image_radius_mm) const {

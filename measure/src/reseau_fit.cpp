@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 
 #include "platemeter/core/error.h"
@@ -158,16 +159,28 @@ Solution Solve(ReseauFitModel model, const std::vector<ReseauObservation>& obs, 
   solver.gradient_tolerance = 1e-16;
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
+  if (!summary.IsSolutionUsable()) {
+    throw Error("reseau fit", "the " + std::string(ReseauFitModelName(model)) +
+                                  " fit failed (" + OneLine(summary.message) + "): the crosses do not fit the grid");
+  }
   // Covariance (J^T J)^-1 in the free parameters; the Jacobian comes back in
   // the manifold's tangent space, i.e. exactly the free parameters.
   double cost = 0.0;
   ceres::CRSMatrix crs;
-  problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, &crs);
+  if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, &crs) ||
+      crs.num_cols != n || !std::isfinite(cost)) {
+    throw Error("reseau fit", "the fit's residuals or Jacobian are not finite: the crosses do not fit the grid");
+  }
   Eigen::MatrixXd j = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
   for (int r = 0; r < crs.num_rows; ++r) {
     for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) j(r, crs.cols[k]) = crs.values[k];
   }
-  s.covariance = (j.transpose() * j).ldlt().solve(Eigen::MatrixXd::Identity(n, n));
+  const Eigen::LDLT<Eigen::MatrixXd> normal((j.transpose() * j).eval());
+  s.covariance = normal.solve(Eigen::MatrixXd::Identity(n, n));
+  if (normal.info() != Eigen::Success || !s.covariance.allFinite() || (s.covariance.diagonal().array() <= 0.0).any()) {
+    throw Error("reseau fit", "the " + std::string(ReseauFitModelName(model)) +
+                                  " model is not determined by the crosses used (singular normal equations)");
+  }
   s.chi2 = 2.0 * cost;
   return s;
 }
@@ -260,6 +273,13 @@ PlanePoint ReseauFit::ToGrid(const PlanePoint& measured) const {
 ReseauFit FitReseau(const std::vector<ReseauObservation>& observations, const ReseauFitOptions& options) {
   std::string why;
   if (!options.Check(&why)) throw Error("reseau fit", why);
+  for (const ReseauObservation& o : observations) {
+    const double values[] = {o.grid_x_mm, o.grid_y_mm, o.measured.x, o.measured.y, o.measured.cov.xx,
+                             o.measured.cov.xy, o.measured.cov.yy};
+    if (!std::all_of(std::begin(values), std::end(values), [](double v) { return std::isfinite(v); })) {
+      throw Error("reseau fit", "cross " + o.id + " has a non-finite position or covariance");
+    }
+  }
   const int n = ParameterCount(options.model);
   std::vector<bool> rejected(observations.size(), false);
   ReseauFit fit;

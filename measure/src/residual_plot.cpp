@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "platemeter/core/atomic_file.h"
 #include "platemeter/core/error.h"
 
 namespace platemeter {
@@ -99,16 +100,18 @@ void WriteResidualPlotPng(const std::string& path, const std::vector<ReseauObser
   cairo_move_to(cr, margin, 0.5 * margin);
   cairo_show_text(cr, title.c_str());
   cairo_destroy(cr);
-  // Write beside, then rename (no half-written PNG under the final name).
-  const std::filesystem::path final_path(path);
-  const std::string partial = (final_path.parent_path() / ("." + final_path.filename().string() + ".partial")).string();
-  const cairo_status_t status = cairo_surface_write_to_png(surface, partial.c_str());
+  // Encoded in memory, then written atomically (no half-written PNG under the final name).
+  std::string png;
+  const cairo_status_t status = cairo_surface_write_to_png_stream(
+      surface,
+      [](void* closure, const unsigned char* data, unsigned int length) {
+        static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
+        return CAIRO_STATUS_SUCCESS;
+      },
+      &png);
   cairo_surface_destroy(surface);
-  if (status != CAIRO_STATUS_SUCCESS) {
-    std::filesystem::remove(partial);
-    throw Error(path, std::string("cannot write the PNG: ") + cairo_status_to_string(status));
-  }
-  std::filesystem::rename(partial, final_path);
+  if (status != CAIRO_STATUS_SUCCESS) throw Error(path, std::string("cannot encode the PNG: ") + cairo_status_to_string(status));
+  WriteFileAtomically(path, png);
 }
 
 }  // namespace platemeter

@@ -4,6 +4,8 @@
 
 #include "detect_stages.h"
 
+#include <fmt/format.h>
+
 #include <filesystem>
 #include <optional>
 #include <utility>
@@ -25,7 +27,14 @@ struct Detections {
   std::optional<FiducialDetection> fiducials;
   ScanOrientation orientation;
   int polarity = -1;
+  long masked_px = 0;  // masked pixels of the scan (core/image.h), counted by the detector that read it all
 };
+
+// Counted once, by whichever detector read the whole scan: the reseau's overview, else the fiducial search's.
+long MaskedPixels(const Detections& d) {
+  if (d.reseau) return d.reseau->masked_px;
+  return d.fiducials ? d.fiducials->masked_px : 0;
+}
 
 MeasurementFile ToMeasurementFile(const Detections& detections, const std::string& scan, const std::string& camera,
                                   double pixel_size_um) {
@@ -38,6 +47,7 @@ MeasurementFile ToMeasurementFile(const Detections& detections, const std::strin
   file.header.software_version = std::string("platemeter ") + kVersion;
   file.header.extra.push_back({"orientation", detections.orientation.Name()});
   if (detections.reseau) file.header.extra.push_back({"polarity", detections.polarity < 0 ? "dark" : "bright"});
+  if (detections.masked_px > 0) file.header.extra.push_back({"masked_pixels", std::to_string(detections.masked_px)});
   std::vector<DetectedPoint> points;
   if (detections.reseau) points = detections.reseau->points;
   if (detections.fiducials) points.insert(points.end(), detections.fiducials->points.begin(), detections.fiducials->points.end());
@@ -62,6 +72,7 @@ nlohmann::json SummaryJson(const Detections& detections, const std::string& scan
   nlohmann::json j;
   j["scan"] = scan;
   j["orientation"] = detections.orientation.Name();
+  j["masked_pixels"] = detections.masked_px;
   if (detections.reseau) {
     const ReseauDetection& d = *detections.reseau;
     nlohmann::json r;
@@ -147,6 +158,7 @@ DetectRun RunDetection(const DetectRequest& request, const DefinitionRegistry& r
       detections.orientation = detections.fiducials->orientation;
     }
   }
+  detections.masked_px = MaskedPixels(detections);
   const DetectContext context{.request = request,
                               .registry = registry,
                               .image = image,
@@ -163,6 +175,10 @@ DetectRun RunDetection(const DetectRequest& request, const DefinitionRegistry& r
   run.file = ToMeasurementFile(detections, request.scan, request.camera, pixel_size_um);
   run.summary = SummaryJson(detections, request.scan, grid_name);
   run.grid_name = grid_name;
+  if (detections.masked_px > 0) {
+    run.messages += fmt::format("scan: {} pixels masked (NaN, infinite or |value| > {:g}: no value, not used)\n",
+                                detections.masked_px, kMaxPixelMagnitudeDn);
+  }
   if (detections.reseau) run.messages += "reseau: " + detections.reseau->summary + "\n";
   if (detections.fiducials) run.messages += "fiducials: " + detections.fiducials->summary + "\n";
   for (auto& [key, stage] : stages) {
@@ -173,15 +189,17 @@ DetectRun RunDetection(const DetectRequest& request, const DefinitionRegistry& r
   return run;
 }
 
-DetectFiles WriteDetectRun(const DetectRun& run, const std::string& scan, const std::string& out_dir) {
-  std::filesystem::create_directories(out_dir);
+std::vector<std::string> DetectSetMembers(const std::string& scan) {
   const std::string stem = std::filesystem::path(scan).stem().string();
-  DetectFiles files;
-  files.measurements_csv = (std::filesystem::path(out_dir) / (stem + ".measurements.csv")).string();
-  files.summary_json = (std::filesystem::path(out_dir) / (stem + ".detect.json")).string();
-  WriteMeasurementFile(files.measurements_csv, run.file);
-  WriteFileAtomically(files.summary_json, run.summary.dump(2) + "\n");
-  return files;
+  return {stem + ".measurements.csv", stem + ".detect.json"};
+}
+
+DetectFiles WriteDetectRun(const DetectRun& run, const std::string& scan, OutputSet* outputs) {
+  const std::vector<std::string> names = DetectSetMembers(scan);
+  outputs->Write(names[0], [&](const std::string& path) { WriteMeasurementFile(path, run.file); });
+  outputs->Write(names[1], [&](const std::string& path) { WriteFileAtomically(path, run.summary.dump(2) + "\n"); });
+  outputs->Commit();
+  return {outputs->FinalPath(names[0]), outputs->FinalPath(names[1])};
 }
 
 }  // namespace platemeter::pipeline

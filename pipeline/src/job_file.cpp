@@ -9,6 +9,7 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "platemeter/core/duty_cycle.h"
@@ -19,6 +20,8 @@
 
 namespace platemeter::pipeline {
 namespace {
+
+constexpr size_t kMaxUtcLength = 64;
 
 int LineOf(const toml::node& node) { return static_cast<int>(node.source().begin.line); }
 
@@ -83,24 +86,31 @@ class Value {
     if (text_ == "false") return false;
     Fail("= '" + text_ + "' must be true or false");
   }
-  // An array of integers (TOML) or a comma-separated list (manifest: "2,3,4").
-  std::vector<int> Integers() const {
+  // An array of integers (TOML) or a comma-separated list (manifest: "2,3,4"), each in min..max.
+  std::vector<int> Integers(int min, int max) const {
     std::vector<int> out;
+    auto check = [&](long long n) {
+      if (n < min || n > max) {
+        Fail("holds " + std::to_string(n) + ", outside the accepted range " + std::to_string(min) + ".." +
+             std::to_string(max));
+      }
+      out.push_back(static_cast<int>(n));
+    };
     if (node_) {
       const toml::array* array = node_->as_array();
       if (!array) Fail("must be an array of integers");
       for (const toml::node& item : *array) {
         if (!item.is_integer()) Fail("must be an array of integers");
-        out.push_back(static_cast<int>(item.as_integer()->get()));
+        check(item.as_integer()->get());
       }
       return out;
     }
     std::stringstream items(text_);
     for (std::string item; std::getline(items, item, ',');) {
-      int n = 0;
+      long long n = 0;
       const auto result = std::from_chars(item.data(), item.data() + item.size(), n);
       if (result.ec != std::errc() || result.ptr != item.data() + item.size()) Fail("= '" + text_ + "' must be integers like 2,3,4,5");
-      out.push_back(n);
+      check(n);
     }
     return out;
   }
@@ -168,6 +178,8 @@ const std::vector<KeySetter>& Setters() {
       {"trails.start_utc",
        [](JobDefinition& j, const Value& v) {
          const std::string text = v.String();
+         // ISO 8601 is short; core's regex parser recurses per character (stack overflow on huge strings).
+         if (text.size() > kMaxUtcLength) v.Fail("is longer than " + std::to_string(kMaxUtcLength) + " characters (not an ISO 8601 time)");
          try {
            ParseUtcIso8601(text);
          } catch (const Error& e) {
@@ -178,7 +190,7 @@ const std::vector<KeySetter>& Setters() {
       {"trails.leading_dashes",
        [](JobDefinition& j, const Value& v) {
          TrailRequest trails = j.measure.detect.trails.value_or(TrailRequest{});  // j unchanged on a bad value
-         trails.leading_dashes = v.Integers();
+         trails.leading_dashes = v.Integers(2, 5);  // seed 001's Table 1
          CheckTrails(trails, v);
          Trails(j) = trails;
        }},
@@ -273,15 +285,12 @@ void CheckWhole(const toml::table& root, const std::string& origin, const JobDef
 
 }  // namespace
 
-JobDefinition LoadJobFile(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw Error(path, "no such job file");
-  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path, "is not a file (a job file is TOML, docs/job.md)");
+JobDefinition ParseJobFile(const std::string& text, const std::string& path) {
   toml::table root;
   try {
-    root = toml::parse_file(path);
+    root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
-    const int line = static_cast<int>(e.source().begin.line);  // 0: the file could not be read
+    const int line = static_cast<int>(e.source().begin.line);
     throw Error(path, (line > 0 ? "line " + std::to_string(line) + ": " : std::string()) + OneLine(std::string(e.description())));
   }
   JobDefinition job;
@@ -289,6 +298,17 @@ JobDefinition LoadJobFile(const std::string& path) {
   ReadTable(root, "", path, &job);
   CheckWhole(root, path, job);
   return job;
+}
+
+JobDefinition LoadJobFile(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw Error(path, "no such job file");
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path, "is not a file (a job file is TOML, docs/job.md)");
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  if (!in || in.bad()) throw Error(path, "cannot read the job file");
+  return ParseJobFile(text.str(), path);
 }
 
 void ApplyJobOverride(JobDefinition& job, const std::string& key, const std::string& value) {

@@ -1,37 +1,17 @@
-// Detection and correction options for measure and validate (measure_prepare.h).
+// Detection and correction options for measure and validate (measure_prepare.h); the options are
+// checked in request_checks.cpp.
 #include "measure_prepare.h"
 
 #include <filesystem>
 
 #include "platemeter/core/error.h"
-#include "platemeter/core/scan_orientation.h"
 #include "platemeter/measure/fiducial_orientation.h"
 
 namespace platemeter::pipeline {
 
-void CheckMeasureOptions(const MeasureRequest& request) {
-  ReseauFitModel model;
-  if (!ParseReseauFitModel(request.model, &model)) {
-    throw Error("--model", "'" + request.model + "' is not one of similarity, affine, scales, projective");
-  }
-  if (!ParseReseauFitModel(request.fiducial_model, &model) ||
-      (model != ReseauFitModel::kSimilarity && model != ReseauFitModel::kAffine)) {
-    throw Error("--fiducial-model", "'" + request.fiducial_model + "' is not one of similarity, affine");
-  }
-  for (const std::string* orientation : {&request.detect.orientation, &request.second_orientation}) {
-    ScanOrientation parsed;
-    if (!orientation->empty() && !ParseScanOrientation(*orientation, &parsed)) {
-      throw Error(orientation == &request.detect.orientation ? "--orientation" : "--second-orientation",
-                  "'" + *orientation + "' is not one of " + kScanOrientationNames);
-    }
-  }
-  if (!(request.min_cross_fraction >= 0.0 && request.min_cross_fraction <= 1.0)) {
-    throw Error("--min-cross-fraction", std::to_string(request.min_cross_fraction) + " must lie in 0..1");
-  }
-  // A job's per-scan overrides can switch trails or passpoints on without their required value.
-  const DetectRequest& d = request.detect;
-  if (d.trails && d.trails->start_utc.empty()) throw Error("trails", "no start_utc (the plate's first shutter opening, UTC)");
-  if (d.passpoints && d.passpoints->diameter_um <= 0.0) throw Error("passpoints", "no diameter_um (the mark's outer diameter)");
+std::string PlateStem(const std::string& scan_or_measurements) {
+  const std::filesystem::path path(scan_or_measurements);
+  return path.extension() == ".csv" ? path.stem().stem().string() : path.stem().string();
 }
 
 PreparedMeasurement PrepareMeasurement(const MeasureRequest& request, const DefinitionRegistry& registry, bool local,
@@ -50,13 +30,12 @@ PreparedMeasurement PrepareMeasurement(const MeasureRequest& request, const Defi
     if (!p.file.header.camera.empty() && p.file.header.camera != camera.name) {
       throw Error(request.detect.scan, "was detected with camera '" + p.file.header.camera + "', not '" + camera.name + "'");
     }
-    p.stem = scan.stem().stem().string();
   } else {
     DetectRun run = RunDetection(request.detect, registry);
     *messages += run.messages;
     p.file = std::move(run.file);
-    p.stem = scan.stem().string();
   }
+  p.stem = PlateStem(request.detect.scan);
   PlateCorrectionOptions& o = p.options;
   o.pixel_size_um = request.detect.pixel_size_um;
   if (!request.detect.orientation.empty()) o.orientation = request.detect.orientation;

@@ -20,6 +20,9 @@ struct PreparedMeasurement {
 // Throws Error for option values that name nothing (model, fiducial model, orientation), before any work.
 void CheckMeasureOptions(const MeasureRequest& request);
 
+// The plate id and stem of the output files: the scan's stem (detect's <stem>.measurements.csv: <stem>).
+std::string PlateStem(const std::string& scan_or_measurements);
+
 // Detects request.detect.scan (or reads it when it is a .csv measurement file) and resolves the correction
 // options. `local`: measure (reseau or fiducials, local step) rather than validate (reseau only).
 // The detectors' console lines are appended to *messages.

@@ -8,12 +8,14 @@
 
 #include <cmath>
 #include <filesystem>
+#include <new>
 #include <sstream>
 
 #include "measure_prepare.h"
 #include "measure_report.h"
 #include "platemeter/core/atomic_file.h"
 #include "platemeter/core/error.h"
+#include "platemeter/core/output_set.h"
 #include "platemeter/measure/double_measurement.h"
 #include "platemeter/measure/micmac_export.h"
 #include "platemeter/measure/residual_plot.h"
@@ -22,12 +24,21 @@ namespace platemeter::pipeline {
 namespace {
 
 // An error that does not name the scan yet gets it as its subject, so a batch log line says which scan failed.
+// The kind is kept: a failure of the machine (EnvironmentError, no memory, a file-system call) stays one, so
+// that batch retries it on a rerun.
 [[noreturn]] void RethrowNaming(const std::string& scan) {
   try {
     throw;
+  } catch (const EnvironmentError& e) {
+    if (std::string(e.what()).find(scan) != std::string::npos) throw;
+    throw EnvironmentError(scan, e.what());
   } catch (const Error& e) {
     if (std::string(e.what()).find(scan) != std::string::npos) throw;
     throw Error(scan, e.what());
+  } catch (const std::bad_alloc&) {
+    throw EnvironmentError(scan, "out of memory");
+  } catch (const std::filesystem::filesystem_error& e) {
+    throw EnvironmentError(scan, OneLine(e.what()));
   } catch (const std::exception& e) {
     throw Error(scan, OneLine(e.what()));
   }
@@ -87,12 +98,26 @@ nlohmann::json ReportJson(const MeasureRequest& request, const PreparedMeasureme
     j["corrections"].push_back({{"name", c.name}, {"parameters", params}});
   }
   j["points_corrected"] = report.points_corrected;
+  // Non-finite pixels of a float scan, masked by detection (docs/detect.md, "Masked pixels").
+  j["masked_pixels"] = 0;
+  for (const auto& [key, value] : p.file.header.extra) {
+    if (key == "masked_pixels") j["masked_pixels"] = std::stol(value);
+  }
   if (p.grid) j["reseau"] = ValidationJson(report, request.tolerance_um);
   if (report.fiducial) j["fiducial_orientation"] = FiducialJson(*report.fiducial);
   return j;
 }
 
+// The files of one measured scan (docs/measure.md), written as one set.
+std::vector<std::string> MeasureSetMembers(const std::string& stem) {
+  return {stem + ".measurements.csv", stem + ".measure.json", stem + ".residuals.png", stem + ".micmac.xml"};
+}
+
 MeasureSummary Run(const MeasureRequest& request, const DefinitionRegistry& registry) {
+  CheckMeasureOptions(request);
+  const std::string stem = PlateStem(request.detect.scan);
+  // Created before any work: a folder that cannot take the outputs fails the run at once.
+  OutputSet outputs(request.out_dir, MeasureSetMembers(stem));
   std::ostringstream console;
   std::string messages;
   PreparedMeasurement p = Prepare(request, registry, &messages);
@@ -117,30 +142,27 @@ MeasureSummary Run(const MeasureRequest& request, const DefinitionRegistry& regi
     double_json = DoubleMeasurementJson(request.second_scan, second_report, p.grid != nullptr, d, request.tolerance_um);
   }
 
-  std::filesystem::create_directories(request.out_dir);
-  const std::filesystem::path dir(request.out_dir);
-  const std::string csv = (dir / (p.stem + ".measurements.csv")).string();
-  const std::string json = (dir / (p.stem + ".measure.json")).string();
-  const std::string png = (dir / (p.stem + ".residuals.png")).string();
-  const std::string xml = (dir / (p.stem + ".micmac.xml")).string();
+  const std::string csv = stem + ".measurements.csv", json = stem + ".measure.json", png = stem + ".residuals.png",
+                    xml = stem + ".micmac.xml";
   MeasureSummary summary;
-  auto written = [&summary](const std::string& path) {
-    summary.written_files.push_back(std::filesystem::absolute(path).lexically_normal().string());
+  auto written = [&summary, &outputs](const std::string& name) {
+    summary.written_files.push_back(std::filesystem::absolute(outputs.FinalPath(name)).lexically_normal().string());
     return summary.written_files.back();
   };
-  WriteMeasurementFile(csv, p.file);
-  written(csv);
-  WriteMicMacMeasures(xml, p.file);
-  written(xml);
+  outputs.Write(csv, [&](const std::string& path) { WriteMeasurementFile(path, p.file); });
+  outputs.Write(xml, [&](const std::string& path) { WriteMicMacMeasures(path, p.file); });
   if (p.grid) {
     ResidualPlotOptions plot;
     plot.tolerance_um = request.tolerance_um;
-    WriteResidualPlotPng(png, report.observations, report.fit, plot);
-    summary.plot_png = written(png);
+    outputs.Write(png, [&](const std::string& path) { WriteResidualPlotPng(path, report.observations, report.fit, plot); });
   }
   nlohmann::json j = ReportJson(request, p, report);
   if (!double_json.is_null()) j["double_measurement"] = double_json;
-  WriteFileAtomically(json, j.dump(2) + "\n");
+  outputs.Write(json, [&](const std::string& path) { WriteFileAtomically(path, j.dump(2) + "\n"); });
+  outputs.Commit();
+  written(csv);
+  written(xml);
+  if (p.grid) summary.plot_png = written(png);
   summary.report_json = written(json);
 
   if (p.grid) {
@@ -159,9 +181,9 @@ MeasureSummary Run(const MeasureRequest& request, const DefinitionRegistry& regi
     console << "fiducial orientation (" << ReseauFitModelName(f.model) << "): " << f.used << " fiducials, " << f.rejected
             << " rejected, rms " << f.rms_mm * 1e3 << " um, sigma0 " << f.sigma0 << "\n";
   }
-  console << csv << "\n" << json << "\n";
-  if (p.grid) console << png << "\n";
-  console << xml << "\n";
+  console << outputs.FinalPath(csv) << "\n" << outputs.FinalPath(json) << "\n";
+  if (p.grid) console << outputs.FinalPath(png) << "\n";
+  console << outputs.FinalPath(xml) << "\n";
 
   summary.plate_id = p.stem;
   for (const MeasuredPoint& point : p.file.points) {

@@ -1,26 +1,30 @@
 // RunValidate (measure_run.h): the reseau check alone, `platemeter validate`.
-#include <filesystem>
-
 #include "measure_prepare.h"
 #include "measure_report.h"
 #include "platemeter/core/atomic_file.h"
+#include "platemeter/core/output_set.h"
 #include "platemeter/measure/residual_plot.h"
 #include "platemeter/pipeline/measure_run.h"
 
 namespace platemeter::pipeline {
 
 void RunValidate(const MeasureRequest& request, const DefinitionRegistry& registry, std::ostream& console) {
+  CheckMeasureOptions(request);
+  const std::string stem = PlateStem(request.detect.scan);
+  const std::string json_name = stem + ".validate.json", png_name = stem + ".residuals.png";
+  OutputSet outputs(request.out_dir, {json_name, png_name});  // before any work: a bad folder fails at once
   std::string messages;
   PreparedMeasurement p = PrepareMeasurement(request, registry, false, &messages);
   console << messages;
   const PlateCorrectionReport report = CorrectPlate(&p.file, *p.grid, p.options);
-  std::filesystem::create_directories(request.out_dir);
-  const std::string json = (std::filesystem::path(request.out_dir) / (p.stem + ".validate.json")).string();
-  WriteFileAtomically(json, ValidationJson(report, request.tolerance_um).dump(2) + "\n");
-  const std::string png = (std::filesystem::path(request.out_dir) / (p.stem + ".residuals.png")).string();
+  outputs.Write(json_name, [&](const std::string& path) {
+    WriteFileAtomically(path, ValidationJson(report, request.tolerance_um).dump(2) + "\n");
+  });
   ResidualPlotOptions plot;
   plot.tolerance_um = request.tolerance_um;
-  WriteResidualPlotPng(png, report.observations, report.fit, plot);
+  outputs.Write(png_name, [&](const std::string& path) { WriteResidualPlotPng(path, report.observations, report.fit, plot); });
+  outputs.Commit();
+  const std::string json = outputs.FinalPath(json_name), png = outputs.FinalPath(png_name);
   const ReseauFit& f = report.fit;
   console << "reseau fit (" << ReseauFitModelName(f.model) << "): " << f.used << " crosses, " << f.rejected
           << " rejected, rms " << f.rms_mm * 1e3 << " um\n"

@@ -411,5 +411,28 @@ TEST(RunBatch, AScanLockedByAnotherProcessIsLeftToIt) {
   EXPECT_FALSE(fs::exists(lock_path));  // removed once the scan is done
 }
 
+// Issue #28: a manifest saved with a byte order mark reads; fields that are
+// not UTF-8 or hold control characters are refused with the line.
+TEST(ScanList, ManifestWithAByteOrderMarkReads) {
+  TempDir dir;
+  WriteText(dir.path() / "m.csv", "\xEF\xBB\xBFscan,orientation\na.tif,90\n");
+  const std::vector<ScanInput> scans = ReadScanManifest(dir.file("m.csv"), {"orientation"});
+  ASSERT_EQ(scans.size(), 1u);
+  EXPECT_EQ(scans[0].stem, "a");
+  EXPECT_EQ(scans[0].overrides, (std::vector<std::pair<std::string, std::string>>{{"orientation", "90"}}));
+}
+
+TEST(ScanList, ManifestFieldsMustBeUtf8WithoutControlCharacters) {
+  TempDir dir;
+  auto error = [&](const std::string& text) {
+    WriteText(dir.path() / "m.csv", text);
+    return ErrorOf([&] { ReadScanManifest(dir.file("m.csv"), {"orientation"}); });
+  };
+  EXPECT_EQ(error("scan,orientation\np\xff.tif,90\n"),
+            dir.file("m.csv") + ": line 2: column 'scan' byte 0xff at position 2 is not valid UTF-8");
+  EXPECT_EQ(error("scan,orientation\n\"a\nb.tif\",90\n"),
+            dir.file("m.csv") + ": line 2: column 'scan' contains the control character 0x0a at position 2");
+}
+
 }  // namespace
 }  // namespace platemeter

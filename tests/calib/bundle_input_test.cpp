@@ -886,5 +886,32 @@ TEST(BundleJob, MinimalJobWithoutFrames) {
   EXPECT_ERROR(ReadBundleJob(dir.file("none.toml")), "no such bundle job file");
 }
 
+// ---------------------------------------------------------------------------
+// Issue #28: CSV numbers range-checked where they enter; ids valid UTF-8
+// without control characters.
+TEST(BundleCsvRanges, ObservationsOutsideTheAcceptedRangesAreRefused) {
+  const std::string header = "frame,point_id,x_mm,y_mm,sigma_x_mm,sigma_y_mm\n";
+  EXPECT_ERROR(ParseObservationsCsv(header + "F1,P1,1e307,2,0.003,0.003\n", "obs.csv"),
+               "obs.csv: line 2, column 3 (x_mm): '1e307' is outside the accepted range -10000..10000 mm");
+  EXPECT_ERROR(ParseObservationsCsv(header + "F1,P1,1,2,1e155,0.003\n", "obs.csv"),
+               "obs.csv: line 2, column 5 (sigma_x_mm): '1e155' is outside the accepted range 0..1000 mm");
+  EXPECT_EQ(ParseObservationsCsv(header + "F1,P1,-1e4,1e4,1000,1e-9\n", "obs.csv").size(), 1u);  // the bounds
+}
+
+TEST(BundleCsvRanges, GroundPointsOutsideTheAcceptedRangesAreRefused) {
+  const std::string header = "point_id,x_m,y_m,z_m,sigma_x_m,sigma_y_m,sigma_z_m\n";
+  EXPECT_ERROR(ParseGroundPointsCsv(header + "G1,1,2,-1e300,,,\n", "gp.csv"),
+               "gp.csv: line 2, column 4 (z_m): '-1e300' is outside the accepted range -1e30..1e30 m");
+  EXPECT_ERROR(ParseGroundPointsCsv(header + "G1,1,2,3,,1e200,\n", "gp.csv"),
+               "gp.csv: line 2, column 6 (sigma_y_m): '1e200' is outside the accepted range 0..1e9 m");
+}
+
+TEST(BundleCsvText, IdsThatAreNotUtf8OrHoldControlCharactersAreRefused) {
+  EXPECT_ERROR(ParseObservationsCsv("frame,point_id,x_mm,y_mm,sigma_x_mm,sigma_y_mm\nF1,P\xc0\xaf,1,2,0.1,0.1\n", "obs.csv"),
+               "obs.csv: line 2, column 2 (point_id): byte 0xc0 at position 2 is not valid UTF-8");
+  EXPECT_ERROR(ParseGroundPointsCsv("point_id,x_m,y_m,z_m,sigma_x_m,sigma_y_m,sigma_z_m\nG\x7f,1,2,3,,,\n", "gp.csv"),
+               "gp.csv: line 2, column 1 (point_id): contains the control character 0x7f at position 2");
+}
+
 }  // namespace
 }  // namespace platemeter

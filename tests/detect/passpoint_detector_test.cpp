@@ -429,5 +429,28 @@ TEST(PasspointDetector, OptionsChecked) {
   EXPECT_FALSE(options.Check(&why));
 }
 
+// Issue #28: a byte order mark accepted; ids valid UTF-8 without control
+// characters; positions range-checked.
+TEST(PasspointList, AByteOrderMarkIsAccepted) {
+  // Reported: a list saved with a BOM was refused, the message quoting the invisible BOM.
+  const std::vector<ApproximatePasspoint> list = ParsePasspointList("\xEF\xBB\xBFid,x_px,y_px\nA,1,2\n", "points.csv");
+  ASSERT_EQ(list.size(), 1u);
+  EXPECT_EQ(list[0].id, "A");
+}
+
+TEST(PasspointList, IdsThatAreNotUtf8OrHoldControlCharactersAreRefused) {
+  // Reported: a non-UTF-8 id made micmac.xml ill-formed later.
+  EXPECT_EQ(ErrorOf("id,x_px,y_px\nP\xff,1,2\n"), "points.csv: line 2: the id byte 0xff at position 2 is not valid UTF-8");
+  EXPECT_EQ(ErrorOf("id,x_px,y_px\nP\x1b[31m,1,2\n"),
+            "points.csv: line 2: the id contains the control character 0x1b at position 2");
+  EXPECT_EQ(ParsePasspointList("id,x_px,y_px\n\xe2\x98\x85,1,2\n", "points.csv")[0].id, "\xe2\x98\x85");  // a star sign
+}
+
+TEST(PasspointList, PositionsOutsideTheAcceptedRangeAreRefused) {
+  EXPECT_EQ(ErrorOf("id,x_px,y_px\nA,1e307,2\n"),
+            "points.csv: line 2: x_px '1e307' is outside the accepted range -1e7..1e7 px");
+  EXPECT_EQ(ErrorOf("id,x_px,y_px\nA,1,-2e7\n"), "points.csv: line 2: y_px '-2e7' is outside the accepted range -1e7..1e7 px");
+}
+
 }  // namespace
 }  // namespace platemeter

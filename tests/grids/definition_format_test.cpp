@@ -330,5 +330,72 @@ TEST(DefinitionFormat, DocumentedExampleLoads) {
   EXPECT_EQ(camera.lens->coefficients.size(), 6u);
 }
 
+// ---------------------------------------------------------------------------
+// Issue #28: every number of a definition range-checked where it is read; a
+// byte order mark accepted; the fuzz harness's crash as a regression test.
+
+TEST(DefinitionRanges, HugeSpacingIsRefusedNotExpandedToInfinity) {
+  // Reported: spacing_mm = 1e308 loaded and printed -inf coordinates.
+  EXPECT_EQ(ErrorOf(Replace(kUserFile, "spacing_mm = 5.0", "spacing_mm = 1e308")),
+            "bad.toml: line 9: grid 'test-lattice': key 'spacing_mm' = 1e308 is outside the accepted range 0.01..1000 mm");
+  EXPECT_EQ(ErrorOf(Replace(Replace(kUserFile, "columns = 3", "columns = 3001"), "spacing_mm = 5.0", "spacing_mm = 1")),
+            "bad.toml: line 9: grid 'test-lattice': the lattice reaches 1500 mm from its centre, outside the accepted "
+            "range -1000..1000 mm");
+}
+
+TEST(DefinitionRanges, HugePrincipalDistanceIsRefused) {
+  // Reported: a camera with principal distance 1e200 was accepted.
+  EXPECT_EQ(ErrorOf(Replace(kUserFile, "principal_distance_mm = 50.1", "principal_distance_mm = 1e200")),
+            "bad.toml: line 36: camera 'test-camera': lens: key 'principal_distance_mm' = 1e200 is outside the "
+            "accepted range 0..25000 mm");
+  EXPECT_EQ(ErrorOf(Replace(kUserFile, "nominal_principal_distance_mm = 50", "nominal_principal_distance_mm = 1e200")),
+            "bad.toml: line 28: camera 'test-camera': key 'nominal_principal_distance_mm' = 1e200 is outside the "
+            "accepted range 0..25000 mm");
+  EXPECT_EQ(ErrorOf(Replace(kUserFile, "principal_point_x_um = 12.5", "principal_point_x_um = -2e6")),
+            "bad.toml: line 37: camera 'test-camera': lens: key 'principal_point_x_um' = -2e6 is outside the "
+            "accepted range -1e6..1e6 um");
+}
+
+TEST(DefinitionRanges, EveryOtherNumberHasItsRange) {
+  const std::vector<std::pair<std::pair<std::string, std::string>, std::string>> cases = {
+      {{"[\"left\", -20.5, 0.0]", "[\"left\", -2000.5, 0.0]"},
+       "x_mm of point 'left' = -2000.5 is outside the accepted range -1000..1000 mm"},
+      {{"x_mm = 20.5", "x_mm = 1e9"}, "key 'x_mm' = 1e9 is outside the accepted range -1000..1000 mm"},
+      {{"format_width_mm = 60.0", "format_width_mm = 1e5"},
+       "key 'format_width_mm' = 1e5 is outside the accepted range 0..1000 mm"},
+      {{"calibration_temperature_degC = 21.5", "calibration_temperature_degC = -300"},
+       "key 'calibration_temperature_degC' = -300 is outside the accepted range -100..100 degC"},
+      {{"line_width_um = 10.0", "line_width_um = 1e6"},
+       "key 'line_width_um' = 1e6 is outside the accepted range 0..10000 um"},
+      {{"k0 = -1e-3", "k0 = 2"}, "key 'k0' = 2 is outside the accepted range -1..1"},
+      {{"k1_per_mm2 = 2e-6", "k1_per_mm2 = 1e300"}, "key 'k1_per_mm2' = 1e300 is outside the accepted range -1e12..1e12"},
+      {{"principal_point_x_um = 1.5", "principal_point_x_um = 1e300"},
+       "sigma 'principal_point_x_um' = 1e300 is outside the accepted range 0..1e6 um"},
+  };
+  for (const auto& [change, expected] : cases) {
+    const std::string message = ErrorOf(Replace(kUserFile, change.first, change.second));
+    EXPECT_THAT(message, HasSubstr(expected)) << change.second;
+    EXPECT_THAT(message, HasSubstr("bad.toml: line ")) << change.second;
+  }
+}
+
+TEST(DefinitionText, AByteOrderMarkIsAccepted) {
+  const DefinitionRegistry registry = DefinitionRegistry::FromTexts({{"bom.toml", "\xEF\xBB\xBF" + std::string(kUserFile)}});
+  EXPECT_EQ(registry.Camera("test-camera").format_width_mm, 60.0);
+}
+
+// Fuzz finding (tests/fuzz, definitions): a name of 20000 characters
+// overflowed the stack in std::regex_match (a segfault); now a one-line error.
+TEST(DefinitionText, FuzzFindingAHugeNameIsAnErrorNotACrash) {
+  const std::string name(20000, 'A');
+  EXPECT_THAT(ErrorOf(Replace(kUserFile, "name = \"test-lattice\"", "name = \"" + name + "\"")),
+              HasSubstr("' must be letters, digits, '.', '_' or '-' (at most 256)"));
+  const std::string grid = "[[grid]]\nname = \"g\"\ndescription = \"d\"\nsource = \"s\"\ncolumns = 2\nrows = 2\n"
+                           "mark = { type = \"cross\", line_width_um = 10, arm_length_um = 100 }\n"
+                           "points = [[\"X1Y" + std::string(20000, '1') + "\", 1.0, 1.0]]\n";
+  EXPECT_THAT(ErrorOf(grid), HasSubstr("line 8: grid 'g': reseau id 'X1Y111"));
+  EXPECT_THAT(ErrorOf(grid), HasSubstr("' is not of the form X{i}Y{j}"));
+}
+
 }  // namespace
 }  // namespace platemeter

@@ -183,6 +183,15 @@ int LineOf(const std::string& text, const std::string& start) {
   return -1;
 }
 
+std::string ErrorOfFormat(const MeasurementFile& file) {
+  try {
+    FormatMeasurementFile(file);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
 std::string ErrorOf(const std::string& text) {
   try {
     ParseMeasurementFile(text, "plate.csv");
@@ -300,6 +309,95 @@ TEST(MeasurementFile, DocumentedExampleParses) {
   EXPECT_EQ(file.points[3].dot, 17);
   EXPECT_EQ(file.points[3].star_id, "HIP 32349");
   EXPECT_EQ(FormatMeasurementFile(file), example);  // the example is in canonical form
+}
+
+// ---------------------------------------------------------------------------
+// Issue #28: numbers range-checked at entry, text fields valid UTF-8, a byte
+// order mark accepted; the reported cases and the fuzz harness's findings.
+
+// A 16-column file whose data row (line 4) is `row`.
+std::string OneRow(const std::string& row, const std::string& header = "") {
+  return "# platemeter measurement file\n# format_version: 1\n" + header +
+         "id,kind,status,x_px,y_px,sigma_x_px,sigma_y_px,x_mm,y_mm,sigma_x_mm,sigma_y_mm,flags,star_id,trail,dot,"
+         "mid_time_utc\n" + row + "\n";
+}
+
+TEST(MeasurementFileRanges, HugePixelCoordinateIsRefusedAtTheReader) {
+  // Reported: x_px >= 1e307 made measure/validate segfault later.
+  EXPECT_EQ(ErrorOf(OneRow("X1Y1,reseau,measured,1e307,2,0.1,0.1,,,,,,,,,")),
+            "plate.csv: line 4, column 4 (x_px): '1e307' is outside the accepted range -1e7..1e7 px");
+  EXPECT_EQ(ErrorOf(OneRow("X1Y1,reseau,measured,1,-10000001,0.1,0.1,,,,,,,,,")),
+            "plate.csv: line 4, column 5 (y_px): '-10000001' is outside the accepted range -1e7..1e7 px");
+}
+
+TEST(MeasurementFileRanges, HugeSigmaIsRefusedAtTheReader) {
+  // Reported: a sigma >= 1e155 (its square overflows) made measure/validate segfault later.
+  EXPECT_EQ(ErrorOf(OneRow("X1Y1,reseau,measured,1,2,1e155,0.1,,,,,,,,,")),
+            "plate.csv: line 4, column 6 (sigma_x_px): '1e155' is outside the accepted range 0..10000 px");
+  EXPECT_EQ(ErrorOf(OneRow("X1Y1,reseau,measured,,,,,1,2,0.001,1e3000,,,,,")),
+            "plate.csv: line 4, column 11 (sigma_y_mm): '1e3000' is not a number");
+  EXPECT_EQ(ErrorOf(OneRow("X1Y1,reseau,measured,,,,,1,2,0.001,1001,,,,,")),
+            "plate.csv: line 4, column 11 (sigma_y_mm): '1001' is outside the accepted range 0..1000 mm");
+  EXPECT_EQ(ErrorOf(OneRow("X1Y1,reseau,measured,,,,,-10000.5,2,,,,,,,")),
+            "plate.csv: line 4, column 8 (x_mm): '-10000.5' is outside the accepted range -10000..10000 mm");
+  EXPECT_EQ(ErrorOf(OneRow("T1-D1,trail_dot,measured,1,2,,,,,,,,,T1,9223372036854775807,")),
+            "plate.csv: line 4, column 15 (dot): '9223372036854775807' is outside the accepted range 0..1e6");
+  EXPECT_EQ(ErrorOf(OneRow("X1Y1,reseau,measured,1,2,,,,,,,,,,,", "# pixel_size_um: 1e300\n")),
+            "plate.csv: line 3: pixel_size_um '1e300' is outside the accepted range 0.01..10000 um");
+}
+
+TEST(MeasurementFileRanges, TheBoundsThemselvesAreAccepted) {
+  const MeasurementFile file = ParseMeasurementFile(
+      OneRow("X1Y1,reseau,measured,10000000,-1e7,10000,0,-1e4,1e4,1000,0,,,,,"), "plate.csv");
+  ASSERT_EQ(file.points.size(), 1u);
+  EXPECT_EQ(*file.points[0].x_px, 1e7);
+  EXPECT_EQ(*file.points[0].y_px, -1e7);
+  EXPECT_EQ(*file.points[0].sigma_x_px, 1e4);
+  EXPECT_EQ(*file.points[0].y_mm, 1e4);
+  EXPECT_EQ(*file.points[0].sigma_x_mm, 1e3);
+}
+
+TEST(MeasurementFileRanges, WriterRefusesWhatTheReaderWouldRefuse) {
+  MeasurementFile file = Sample();
+  file.points[0].x_px = 1e307;
+  EXPECT_EQ(ErrorOfFormat(file), "measurement file: point 'X1Y1': x_px '1e+307' is outside the accepted range -1e7..1e7 px");
+  file = Sample();
+  file.points[0].sigma_y_mm = 1e155;
+  EXPECT_EQ(ErrorOfFormat(file),
+            "measurement file: point 'X1Y1': sigma_y_mm '1e+155' is outside the accepted range 0..1000 mm");
+  file = Sample();
+  file.points[0].id = "X1\xffY1";
+  EXPECT_EQ(ErrorOfFormat(file), "measurement file: point 'X1\xffY1': a text field byte 0xff at position 3 is not valid UTF-8");
+}
+
+TEST(MeasurementFileText, AByteOrderMarkIsAccepted) {
+  const MeasurementFile file = ParseMeasurementFile("\xEF\xBB\xBF" + OneRow("X1Y1,reseau,measured,1,2,,,,,,,,,,,"), "plate.csv");
+  ASSERT_EQ(file.points.size(), 1u);
+  EXPECT_EQ(file.points[0].id, "X1Y1");
+}
+
+TEST(MeasurementFileText, IdsThatAreNotUtf8OrHoldControlCharactersAreRefused) {
+  // Reported: a non-UTF-8 id made micmac.xml ill-formed.
+  EXPECT_EQ(ErrorOf(OneRow("P\xe9,passpoint,measured,1,2,,,,,,,,,,,")),
+            "plate.csv: line 4, column 1 (id): byte 0xe9 at position 2 is not valid UTF-8");
+  EXPECT_EQ(ErrorOf(OneRow("P1,star,measured,1,2,,,,,,,,HIP\x01 7,,,")),
+            "plate.csv: line 4, column 13 (star_id): contains the control character 0x01 at position 4");
+  EXPECT_EQ(ErrorOf(OneRow("X1Y1,reseau,measured,1,2,,,,,,,,,,,", "# plate_id: \xc3(\n")),
+            "plate.csv: line 3: the header line byte 0xc3 at position 13 is not valid UTF-8");
+  // Valid UTF-8 beyond ASCII is fine.
+  EXPECT_EQ(ParseMeasurementFile(OneRow("P\xc3\xa9,passpoint,measured,1,2,,,,,,,,,,,"), "plate.csv").points[0].id,
+            "P\xc3\xa9");
+}
+
+// Fuzz findings (tests/fuzz, measurement_file): fields the reader accepted but
+// the writer refuses, so a file read could not be written back.
+TEST(MeasurementFileText, FuzzFindingsQuotesAndEqualsInACorrectionName) {
+  EXPECT_EQ(ErrorOf(OneRow("T2-D17,trail_dot,measured,1,2,,,,,,,,HIP \"32349,T2,17,")),
+            "plate.csv: line 4, column 13 (star_id): contains a double quote (there is no CSV quoting)");
+  EXPECT_EQ(ErrorOf(OneRow("X1Y1,reseau,measured,1,2,,,,,,,,,,,", "# correction: ther=mal\n")),
+            "plate.csv: line 3: correction name 'ther=mal' contains '=' (write NAME param=value ...)");
+  EXPECT_EQ(ErrorOf(OneRow("T1-D1,trail_dot,measured,1,2,,,,,,,,,T1,1," + std::string(65, '1'))),
+            "plate.csv: line 4, column 16 (mid_time_utc): longer than 64 characters (not an ISO 8601 time)");
 }
 
 }  // namespace

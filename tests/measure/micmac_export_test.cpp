@@ -61,5 +61,32 @@ TEST(MicMacExport, ParsesWithMicMacElementNames) {
   EXPECT_EQ(xpath("string(" + root + "/NameIm)"), "scan.tif");
 }
 
+// A scan named in another encoding (Latin-1 "plaque-\xe9t\xe9") and an id with a control character stay
+// well-formed XML: each byte sequence XML cannot hold becomes U+FFFD; valid UTF-8 passes unchanged.
+TEST(MicMacExport, TextThatIsNotUtf8StaysWellFormed) {
+  MeasurementFile file;
+  file.header.scan_file = "/data/plaque-\xe9t\xe9.tif";
+  MeasuredPoint a;
+  a.id = "P\x01" "7";
+  a.x_px = 1.5;
+  a.y_px = 2.5;
+  MeasuredPoint b = a;
+  b.id = "\xC3\xA9toile";  // UTF-8 e-acute
+  file.points = {a, b};
+  testing::TempDir dir;
+  const std::string path = dir.file("m.xml");
+  WriteMicMacMeasures(path, file);
+  const std::string root = "/SetOfMesureAppuisFlottants/MesureAppuiFlottant1Im";
+  auto text = [&](const std::string& element) {
+    std::string out = Shell("xmllint --xpath 'string(" + root + "/" + element + ")' " + path + " 2>&1");
+    if (!out.empty() && out.back() == '\n') out.pop_back();
+    return out;
+  };
+  EXPECT_EQ(Shell("xmllint --noout " + path + " 2>&1"), "");  // well-formed: xmllint prints nothing
+  EXPECT_EQ(text("NameIm"), "plaque-\xEF\xBF\xBDt\xEF\xBF\xBD.tif");
+  EXPECT_EQ(text("OneMesureAF1I[1]/NamePt"), "P\xEF\xBF\xBD" "7");
+  EXPECT_EQ(text("OneMesureAF1I[2]/NamePt"), "\xC3\xA9toile");
+}
+
 }  // namespace
 }  // namespace platemeter

@@ -265,5 +265,64 @@ TEST(JobFile, TheFingerprintHasEveryOutputChangingOption) {
   EXPECT_NE(CanonicalOptionsText(plain).find("trails = none\n"), std::string::npos);
 }
 
+// ---------------------------------------------------------------------------
+// Issue #28: numbers range-checked where they enter; the text variant the fuzz
+// harness (tests/fuzz) reads.
+
+std::string ParseError(const std::string& text) {
+  try {
+    ParseJobFile(text, "job.toml");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(JobFileRanges, HugeLeadingDashCountIsRefusedNotWrappedToMinusOne) {
+  // Reported: leading_dashes = [2^63-1] was reported as "-1 leading dashes".
+  const std::string head = "camera = \"orbigon\"\n[trails]\nstart_utc = \"1972-05-12T05:30:00Z\"\n";
+  EXPECT_EQ(ParseError(head + "leading_dashes = [9223372036854775807]\n"),
+            "job.toml: line 4: key 'trails.leading_dashes' holds 9223372036854775807, outside the accepted range 2..5");
+  EXPECT_EQ(ParseError(head + "leading_dashes = [2, 4294967298]\n"),
+            "job.toml: line 4: key 'trails.leading_dashes' holds 4294967298, outside the accepted range 2..5");
+  JobDefinition job;
+  try {
+    ApplyJobOverride(job, "trails.leading_dashes", "2,9223372036854775807");
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "manifest: key 'trails.leading_dashes' holds 9223372036854775807, outside the accepted range 2..5");
+  }
+  EXPECT_EQ(ParseError(head + "leading_dashes = [5, 2]\n"), "");
+}
+
+TEST(JobFileText, TheTextVariantReadsLikeTheFile) {
+  TempDir dir;
+  WriteText(dir.file("job.toml"), JobDocsExample());
+  const JobDefinition from_file = LoadJobFile(dir.file("job.toml"));
+  const JobDefinition from_text = ParseJobFile(JobDocsExample(), dir.file("job.toml"));
+  EXPECT_EQ(from_text.source, from_file.source);
+  EXPECT_EQ(from_text.measure.detect.passpoints->list_file, from_file.measure.detect.passpoints->list_file);
+  EXPECT_EQ(from_text.measure.detect.trails->leading_dashes, (std::vector<int>{2, 3, 4}));
+  // A byte order mark is accepted (toml++ skips it).
+  EXPECT_EQ(ParseJobFile("\xEF\xBB\xBF" + JobDocsExample(), "job.toml").measure.detect.camera, "sn004-stellar");
+}
+
+// Fuzz finding (tests/fuzz, job_file): a start_utc of thousands of characters
+// is refused before core's regex parser, which recurses per character.
+TEST(JobFileText, FuzzFindingAHugeStartTimeIsRefusedBeforeParsing) {
+  const std::string huge = "1972-05-12T05:30:00." + std::string(50000, '0') + "Z";
+  EXPECT_EQ(ParseError("[trails]\nstart_utc = \"" + huge + "\"\n"),
+            "job.toml: line 2: key 'trails.start_utc' is longer than 64 characters (not an ISO 8601 time)");
+}
+
+// libFuzzer finding (docs/fuzzing.md): a table header starting with '#' trips
+// a debug assertion inside toml++ (parse_key); a release build must still
+// report it as malformed TOML on one line.
+TEST(JobFileText, LibFuzzerFindingATableHeaderStartingWithHashIsMalformed) {
+  EXPECT_EQ(ParseError("grid = \"orbigon\"\n[# a comment]\n"),
+            "job.toml: line 2: Error while parsing key: expected bare key starting character or string delimiter, saw '#'");
+}
+
 }  // namespace
 }  // namespace platemeter::pipeline

@@ -88,6 +88,12 @@ TEST(MeasureRun, TooFewCrossesOrTheWrongCameraFailNamingTheScan) {
                                           "hidden or damaged");
   EXPECT_FALSE(std::filesystem::exists(dir.file("out")));
   request.min_cross_fraction = 0.03;  // 4 of 121 accepted when asked for
+  // They lie on one row of the grid: a line does not determine the scales model's second scale and
+  // non-orthogonality (a singular fit is refused, not reported with infinite sigmas); a similarity it does.
+  EXPECT_EQ(RunMeasureError(request), request.detect.scan +
+                                          ": reseau fit: the scales model is not determined by the crosses used "
+                                          "(singular normal equations)");
+  request.model = "similarity";
   EXPECT_EQ(RunMeasureError(request), "");
 
   request.detect.scan = OrbigonTruthMeasurementFile(dir);

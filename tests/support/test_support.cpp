@@ -33,19 +33,35 @@ std::string ReadAll(const std::filesystem::path& path) {
   buffer << in.rdbuf();
   return buffer.str();
 }
-}  // namespace
 
-CommandResult RunPlatemeter(const std::string& arguments) {
-  TempDir dir;
+// Runs `command` through the shell with stdout and stderr captured.
+CommandResult RunCaptured(const std::string& command, const TempDir& dir) {
   const std::string out_path = dir.file("stdout"), err_path = dir.file("stderr");
-  const std::string command =
-      std::string("'") + PLATEMETER_BIN + "' " + arguments + " >'" + out_path + "' 2>'" + err_path + "'";
-  const int status = std::system(command.c_str());
+  const int status = std::system((command + " >'" + out_path + "' 2>'" + err_path + "'").c_str());
   CommandResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   result.out = ReadAll(out_path);
   result.err = ReadAll(err_path);
   return result;
+}
+}  // namespace
+
+CommandResult RunPlatemeter(const std::string& arguments) {
+  TempDir dir;
+  return RunCaptured(std::string("'") + PLATEMETER_BIN + "' " + arguments, dir);
+}
+
+CommandResult RunShell(const std::string& script, bool private_mounts) {
+  TempDir dir;
+  std::ofstream(dir.file("script.sh")) << "PLATEMETER='" << PLATEMETER_BIN << "'\n" << script << "\n";
+  return RunCaptured(std::string(private_mounts ? "unshare -rm " : "") + "sh '" + dir.file("script.sh") + "'", dir);
+}
+
+bool PrivateMountsAvailable() {
+  static const bool available =
+      std::system("unshare -rm sh -c 'd=$(mktemp -d) && mount -t tmpfs -o size=64k tmpfs \"$d\" && umount \"$d\" "
+                  "&& rmdir \"$d\"' >/dev/null 2>&1") == 0;
+  return available;
 }
 
 double PeakRssMb() {

@@ -26,6 +26,14 @@ struct CommandResult {
 // Runs the platemeter binary with a shell-quoted argument string.
 CommandResult RunPlatemeter(const std::string& arguments);
 
+// Runs the shell script (PLATEMETER is set to the binary's path); with private_mounts, in a private
+// mount namespace as root of a user namespace (`unshare -rm`), where it may mount a tmpfs.
+CommandResult RunShell(const std::string& script, bool private_mounts = false);
+
+// Whether `unshare -rm` can give a test a private mount namespace (a tmpfs of a set size
+// for a full disk, a read-only folder that root cannot write either).
+bool PrivateMountsAvailable();
+
 // The whole content of a text file ("" if it cannot be read).
 std::string ReadTextFile(const std::string& path);
 

@@ -23,6 +23,8 @@ struct ScanRecord {
   std::string scan;    // the scan path as listed
   std::string status;  // "ok" or "failed"
   std::string reason;  // failed: why, one line
+  std::string failure;  // failed: "input" (a defect of the scan or its options: remembered) or "environment"
+                        // (disk full, no permission, I/O: a plain rerun retries it); records before it: "input"
   std::string fingerprint;   // ScanFingerprint (empty when the scan could not be read)
   std::string scan_sha256;   // lower-case hex (empty when unreadable)
   uint64_t scan_size_bytes = 0;  // bytes, when hashed: with the mtime, the quick "unchanged" check
@@ -44,7 +46,11 @@ std::string FormatScanRecord(const ScanRecord& record);
 // Throws Error(subject, reason) for malformed JSON or missing/mistyped keys.
 ScanRecord ParseScanRecord(const std::string& text, const std::string& subject);
 
-// OUT/<stem>/ and OUT/<stem>/<stem>.batch.json.
+// The name of a scan's folder and record: its stem; a stem too long for the file system's names with
+// measure's longest suffix (".measurements.csv", 255 bytes in all) is cut to 200 bytes + "~" + 12 hex digits
+// of its SHA-256, so that the scan's failure ("file name too long") is still recorded and listed.
+std::string ScanFolderName(const std::string& stem);
+// OUT/<folder name>/ and OUT/<folder name>/<folder name>.batch.json.
 std::string ScanFolder(const std::string& out_dir, const std::string& stem);
 std::string RecordPath(const std::string& out_dir, const std::string& stem);
 

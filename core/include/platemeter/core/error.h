@@ -19,6 +19,15 @@ class Error : public std::runtime_error {
   std::string reason_;
 };
 
+// A failure of the machine rather than of the input: disk full, no permission, an
+// I/O error, a folder that cannot be created. The same work may succeed when run
+// again, so batch retries such a scan on a plain rerun (docs/batch.md), while an
+// input defect (a bad scan, the wrong camera) is remembered.
+class EnvironmentError : public Error {
+ public:
+  using Error::Error;
+};
+
 // Folds a multi-line library message (OpenImageIO, toml++) into one line.
 std::string OneLine(const std::string& text);
 

@@ -4,6 +4,13 @@
 // Values come back as grayscale float in the file's own digital numbers (DN):
 // 0..255 for 8-bit, 0..65535 for 16-bit, as stored for float. RGB is converted
 // to luminance (Rec. 709 weights) with a warning.
+//
+// Masked pixels: a float scan's sample that is NaN, infinite, or larger in
+// magnitude than kMaxPixelMagnitudeDn is missing data, not a value; every read
+// returns it as NaN (the one marker the detectors skip), so no estimate or fit
+// ever uses it. Integer scans have no masked pixels (and pay nothing for the rule).
+#include <cmath>
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,6 +34,18 @@ double ImageCacheMemoryUsedMb();
 enum class SampleType { kUint8, kUint16, kFloat32 };
 const char* SampleTypeName(SampleType type);
 
+// DN; a float sample beyond this magnitude is a fill or no-data marker, never an
+// intensity: masked. Above any count a scanner writes (even 32-bit counts stay
+// below 4.3e9), below the fill values in use (1e20, the CF/CMIP missing_value;
+// 9.97e36, netCDF's default fill; -3.4e38, float's lowest, as GDAL writes it).
+// Finite values below it are values (a hot pixel is an outlier for the fits).
+inline constexpr double kMaxPixelMagnitudeDn = 1e10;
+
+// True for a masked pixel as reads return it.
+inline bool IsMaskedPixel(float value_dn) { return std::isnan(value_dn); }
+// Masked pixels among `count` values.
+size_t CountMaskedPixels(const float* values_dn, size_t count);
+
 struct ImageInfo {
   std::string path;
   std::string format_name;  // OpenImageIO's name: "tiff", "png", "jpeg", "fits", ...
@@ -42,6 +61,8 @@ struct ImageInfo {
   // From the TIFF resolution tags (inch or centimetre units only); empty otherwise.
   std::optional<double> pixel_size_x_um;
   std::optional<double> pixel_size_y_um;
+  // Only float scans can hold masked pixels (see kMaxPixelMagnitudeDn).
+  bool may_have_masked_pixels() const { return sample_type == SampleType::kFloat32; }
 };
 
 // A grayscale window in DN, row-major, addressed with absolute pixel indices.
@@ -56,7 +77,11 @@ struct ImageWindow {
 class Image {
  public:
   // Opens a scan and probes its last tile, so that a truncated file fails here
-  // rather than half-way through a measurement. Throws Error on bad input.
+  // rather than half-way through a measurement (TIFF: every strip or tile must lie
+  // inside the file; JPEG: the file must end with its end-of-image marker).
+  // Throws Error on bad input, and for a format OpenImageIO decodes whole (PNG and
+  // any but TIFF, JPEG, FITS) when the decoded image would exceed
+  // WholeDecodeLimitMb().
   static Image Open(const std::string& path);
 
   const ImageInfo& info() const { return info_; }
@@ -80,6 +105,12 @@ class Image {
  private:
   ImageInfo info_;
 };
+
+// MB; the largest decoded image platemeter accepts in a format that OpenImageIO
+// decodes whole on the first pixel read: OpenImageIO's own default guard, the
+// smaller of 32 GB and the physical memory. TIFF, JPEG and FITS are read tile by
+// tile or row by row, so their size is not limited (the memory used is --cache-mb).
+double WholeDecodeLimitMb();
 
 // The pixel size to use: the user's value if given, else the file's resolution
 // tags; throws Error naming the file when neither is there.

@@ -30,6 +30,10 @@ struct CrossFitOptions {
   double outlier_threshold = 4.0;  // pixels with |residual| above this many sigma are dropped in the final fit
   double min_outlier_contrast = 0.05;  // a pixel is never an outlier if it deviates by less than this share of the contrast
   double max_outlier_fraction = 0.08;  // more dropped pixels than this: the cross is rejected as a defect
+  // Masked pixels (image.h) are left out of the fit; they cost precision (the
+  // sigma is the used pixels') but bias nothing. Beyond this share of the fit
+  // region the cross's shape is not held by its own pixels: not fitted.
+  double max_masked_fraction = 0.25;
   int max_iterations = 50;         // per solve
   bool Check(std::string* why) const;
 };
@@ -58,6 +62,9 @@ struct CrossFitResult {
   double residual_sigma_dn = 0.0;   // RMS residual of the final fit (its sigma0)
   double outlier_fraction = 0.0;    // share of pixels dropped as outliers
   int pixels_used = 0;
+  int pixels_masked = 0;            // masked pixels in the fit region, left out
+  double masked_fraction = 0.0;     // their share of the fit region
+  bool too_many_masked = false;     // masked_fraction > max_masked_fraction: not fitted
   std::string summary;              // one sentence: what happened
 };
 

@@ -66,6 +66,7 @@ struct FiducialDetection {
   PlateToPixel plate_to_pixel;        // the prior, or the layout's similarity
   int candidates = 0;                 // coarse candidates (no prior)
   int measured = 0, rejected = 0, missing = 0;
+  long masked_px = 0;                 // no prior: masked pixels in the whole scan (image.h); with one, 0 (not counted)
   std::string summary;
 };
 

@@ -39,6 +39,7 @@ struct MarkFitOptions {
   double outlier_threshold = 4.0;      // pixels with |residual| above this many sigma are dropped in the final fit
   double min_outlier_contrast = 0.05;  // a pixel is never an outlier below this share of the contrast
   double max_outlier_fraction = 0.08;  // share of dropped pixels above which the caller should call it a defect
+  double max_masked_fraction = 0.25;   // share of masked pixels (image.h) above which the mark is not fitted
   double max_corner_arm_px = 200.0;    // px; corner arms are fitted this far from the corner point at most
   bool quadratic_corner_background = true;  // corner arms are long: a quadratic background follows terrain under them
   bool fit_corner_rotation = true;     // false: the corner's rotation is held at the start's (known from the layout)
@@ -73,6 +74,9 @@ struct MarkFitResult {
   double residual_sigma_dn = 0.0;
   double outlier_fraction = 0.0;
   int pixels_used = 0;
+  int pixels_masked = 0;          // masked pixels in the fit region, left out
+  double masked_fraction = 0.0;   // their share of the fit region
+  bool too_many_masked = false;   // masked_fraction > max_masked_fraction: not fitted
   std::string summary;
 };
 

@@ -49,6 +49,7 @@ struct ReseauDetection {
   int candidates = 0;                 // coarse candidates found
   int overview_factor = 1;
   int measured = 0, rejected = 0, missing = 0;
+  long masked_px = 0;                 // masked pixels in the whole scan (image.h: no value, not used)
   double seconds_overview = 0, seconds_candidates = 0, seconds_assignment = 0, seconds_refinement = 0;
   std::string summary;
 };

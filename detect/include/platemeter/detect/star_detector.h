@@ -49,6 +49,9 @@ struct StarDetectorOptions {
   int band_rows = 512;                    // px; rows processed at once (memory ~ 20 bytes x width x (band + 2 mesh))
   std::optional<double> saturation_dn;    // DN; pixels at or above are clipped (default: the file's full scale)
   double floor_dn = 0.0;                  // DN; pixels at or below are clipped (dark stars on a negative)
+  // Masked pixels (core/image.h: no value in the scan) are background to the matched filter and left out
+  // of the fits; an image whose fit window has more than this share of them is rejected (masked_pixels).
+  double max_masked_fraction = 0.25;
   double max_fwhm_ratio = 1.8;            // fitted FWHM / psf_fwhm_px above this: defect (dust, blob)
   double min_fwhm_ratio = 0.4;            // below this: defect (hot pixel, grain)
   double max_ellipticity = 0.3;           // 1 - b/a above this: elongated
@@ -83,7 +86,7 @@ struct StarDetectorOptions {
 };
 
 struct DetectedStar {
-  DetectedPoint point;          // kind star; measured, or rejected (flag defect) with reason line, cross, masked or shape
+  DetectedPoint point;          // kind star; measured, or rejected (flag defect) with reason line, cross, masked, masked_pixels or shape
   double flux_dn = 0.0;         // DN px^2; total flux of the fitted Gaussian (positive contrast)
   double sigma_flux_dn = 0.0;   // DN px^2; formal
   double peak_dn = 0.0;         // DN; fitted peak contrast

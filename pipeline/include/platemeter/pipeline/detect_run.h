@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "platemeter/core/output_set.h"
 #include "platemeter/grids/registry.h"
 #include "platemeter/measure/measurement_file.h"
 
@@ -54,6 +55,10 @@ struct DetectRun {
   std::string messages;     // one line per detector, for the console
 };
 
+// Throws Error naming the option when a value is outside the range the job file accepts (docs/job.md) or
+// names nothing (an orientation, a trail program): before any work.
+void CheckDetectOptions(const DetectRequest& request);
+
 // Throws Error naming the scan when nothing is found or the orientation is ambiguous.
 DetectRun RunDetection(const DetectRequest& request, const DefinitionRegistry& registry);
 
@@ -63,7 +68,10 @@ struct DetectFiles {
   std::string summary_json;      // <stem>.detect.json
 };
 
-// Writes run's measurement file and JSON summary into out_dir (created), named by the scan's stem, each atomically.
-DetectFiles WriteDetectRun(const DetectRun& run, const std::string& scan, const std::string& out_dir);
+// The files of one detected scan (<stem>.measurements.csv, <stem>.detect.json): create their OutputSet
+// before RunDetection, so that a folder that cannot take them fails the command before any work.
+std::vector<std::string> DetectSetMembers(const std::string& scan);
+// Writes run's measurement file and JSON summary into `outputs` and commits the set.
+DetectFiles WriteDetectRun(const DetectRun& run, const std::string& scan, OutputSet* outputs);
 
 }  // namespace platemeter::pipeline

@@ -16,6 +16,8 @@ struct JobDefinition {
 
 // Reads a job TOML file (docs/job.md). Throws Error(path, "line N: reason") for unknown keys, wrong types, bad values.
 JobDefinition LoadJobFile(const std::string& path);
+// The same for the file's text; `path` names it in errors and anchors its relative paths.
+JobDefinition ParseJobFile(const std::string& text, const std::string& path);
 
 // Applies one per-scan override (a manifest column), e.g. key "orientation" value "90m", "temperature_degC" "21.5",
 // "trails.start_utc" "1972-05-12T05:30:00Z", "pixel_size_um" "12.5". Throws Error("manifest", ...) for an unknown

@@ -58,5 +58,27 @@ TEST(BatchEnvironment, ADiskFullFailureHealsOnAPlainRerunATruncatedScanStaysFail
   EXPECT_NE(second.find("the file is truncated"), std::string::npos) << second;
 }
 
+// A scan whose name is too long for its outputs' names (245 characters + ".measurements.csv") fails with the
+// reason and is still recorded and listed (its folder gets a shortened name), instead of vanishing.
+TEST(BatchEnvironment, AScanNameTooLongForItsOutputsIsListedAsFailed) {
+  TempDir tmp;
+  const std::filesystem::path in = tmp.path() / "in";
+  std::filesystem::create_directories(in);
+  const std::string long_stem(245, 'a');
+  std::filesystem::create_symlink(GetFixture().Scan(0), in / (long_stem + ".tif"));
+  std::filesystem::create_symlink(GetFixture().Scan(1), in / "short.tif");
+  const testing::CommandResult r = testing::RunPlatemeter(
+      "--definitions '" + GetFixture().defs + "' batch '" + in.string() + "' -o '" + tmp.file("out") +
+      "' --camera batchtest --orientation 0 --jobs 2");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.out.find("2 scans: 1 measured, 0 already current, 1 failed"), std::string::npos) << r.out;
+  const std::string csv = testing::ReadTextFile(tmp.file("out/batch-summary.csv"));
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3) << csv;  // header + 2 rows
+  EXPECT_NE(csv.find("\n" + long_stem + ","), std::string::npos) << csv;  // its row, under its own stem
+  EXPECT_NE(csv.find(",failed,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("file name too long: 262 characters, the file system allows 255"), std::string::npos) << csv;
+  EXPECT_NE(testing::ReadTextFile(tmp.file("out/index.html")).find("file name too long"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace platemeter

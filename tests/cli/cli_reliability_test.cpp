@@ -108,15 +108,15 @@ TEST(CliReliability, MeasureInterruptedAtAnyMomentLeavesTheOldSetOrTheNewOne) {
   for (const auto& [name, contents] : new_set) std::ofstream(old_ref / name) << "an earlier run's " << name << "\n";
   const std::map<std::string, std::string> old_set = Entries(old_ref);
 
-  // 8 interrupts spread over the whole run (detection, fits), then 24 aimed at the writing of the files:
-  // k * 4 ms after the first file appears in the staging folder (the plot is drawn, the files written, renamed).
+  // 6 interrupts spread over the whole run (detection, fits), then 16 aimed at the writing of the files:
+  // k * 6 ms after the first file appears in the staging folder (the plot is drawn, the files written, renamed).
   struct Aim {
     double delay_s;
     bool after_first_file;
   };
   std::vector<Aim> aims;
-  for (int k = 0; k < 8; ++k) aims.push_back({run_s * k / 8.0, false});
-  for (int k = 0; k < 24; ++k) aims.push_back({0.004 * k, true});
+  for (int k = 0; k < 6; ++k) aims.push_back({run_s * k / 6.0, false});
+  for (int k = 0; k < 16; ++k) aims.push_back({0.006 * k, true});
   const int signals[] = {SIGINT, SIGTERM, SIGHUP};
   int old_left = 0, new_left = 0;
   for (size_t k = 0; k < aims.size(); ++k) {

@@ -16,7 +16,7 @@
 namespace platemeter::fuzz {
 namespace {
 
-constexpr double kCiSecondsPerReader = 6.0;
+constexpr double kCiSecondsPerReader = 3.0;
 
 void FuzzReader(const std::string& name) {
   const FuzzTarget& target = TargetNamed(name);

@@ -6,7 +6,10 @@
 // crosses, dark dust and scratches, random stars over a wide magnitude range
 // and explicit close pairs.
 //
-//   bench_stars [--pixel-um 10] [--stars 2000] [--keep DIR] [--no-sep]
+//   bench_stars [--pixel-um 10] [--stars 2000] [--width-px A:B] [--given-fwhm-px F] [--keep DIR] [--no-sep]
+//   --width-px A:B: star images whose Gaussian sigma grows from A px at the plate's centre to B px at
+//   the farthest star (a wide-angle lens, focus and tilt; issue #26), scored per width bin too; the
+//   detectors are given the centre's width, or F (--given-fwhm-px: a user's guess, e.g. the default 2.5).
 //   (BENCH_STARS_VERBOSE=1 lists every pair star)
 //   bench_stars --detect ours|sep IMAGE OUT.csv FWHM_PX   (child mode)
 //
@@ -186,6 +189,7 @@ std::pair<double, double> PairAxisCrb(double x1, double y1, double f1, double x2
 
 struct TruthStar {
   double x = 0, y = 0, snr = 0, crb_x = 0, crb_y = 0;
+  double sigma_px = 0;  // the image's true Gaussian sigma (PSF and scanner blur)
   bool saturated = false, isolated = true, pair = false;
   double pair_sep = 0, nx = 0, ny = 0;  // pair: separation, unit vector to the neighbour
   double pair_crb_axis = 0;             // pair: joint CRB along the pair axis (px)
@@ -193,6 +197,7 @@ struct TruthStar {
 };
 
 const double kBins[] = {10, 30, 100, 300, 1000, 3000, 1e9};
+const double kWidthBins[] = {0, 1.3, 1.5, 1.7, 1.9, 1e9};  // true sigma, px
 
 void Score(const char* name, const Run& run, const std::vector<TruthStar>& truth,
            const std::vector<std::pair<double, double>>& marks, long pixels) {
@@ -207,12 +212,13 @@ void Score(const char* name, const Run& run, const std::vector<TruthStar>& truth
     }
     return best;
   };
-  std::printf("  isolated stars by SNR    N   found   RMS/CRB\n");
-  for (int b = 0; b + 1 < int(std::size(kBins)); ++b) {
+  // Isolated single stars in a bin (by `value` of the star in [lo, hi)): count, found within 1.5 px,
+  // RMS / CRB; printed with the bin's label.
+  auto score_bin = [&](const char* label, auto value, double lo, double hi, double min_snr) {
     int n = 0, found = 0;
     double s2 = 0;
     for (const TruthStar& t : truth) {
-      if (!t.isolated || t.pair || t.saturated || t.snr < kBins[b] || t.snr >= kBins[b + 1]) continue;
+      if (!t.isolated || t.pair || t.saturated || t.snr < min_snr || value(t) < lo || value(t) >= hi) continue;
       ++n;
       const int k = nearest(t.x, t.y, 1.5);
       if (k < 0) continue;
@@ -220,9 +226,23 @@ void Score(const char* name, const Run& run, const std::vector<TruthStar>& truth
       const double ex = run.found[k].x - t.x, ey = run.found[k].y - t.y;
       s2 += ex * ex / (t.crb_x * t.crb_x) + ey * ey / (t.crb_y * t.crb_y);
     }
-    if (n == 0) continue;
-    std::printf("  %6.0f..%-6.0f        %5d  %5.1f %%   %6.3f\n", kBins[b], std::min(kBins[b + 1], 99999.0), n,
-                100.0 * found / n, found ? std::sqrt(s2 / (2 * found)) : 0.0);
+    if (n > 0)
+      std::printf("  %-22s %5d  %5.1f %%   %6.3f\n", label, n, 100.0 * found / n, found ? std::sqrt(s2 / (2 * found)) : 0.0);
+  };
+  std::printf("  isolated stars by SNR    N   found   RMS/CRB\n");
+  for (int b = 0; b + 1 < int(std::size(kBins)); ++b) {
+    const std::string label = std::to_string(long(kBins[b])) + ".." + std::to_string(long(std::min(kBins[b + 1], 99999.0)));
+    score_bin(label.c_str(), [](const TruthStar& t) { return t.snr; }, kBins[b], kBins[b + 1], 0.0);
+  }
+  bool varying = false;
+  for (const TruthStar& t : truth) varying = varying || std::abs(t.sigma_px - truth.front().sigma_px) > 0.05;
+  if (varying) {
+    std::printf("  isolated stars by width  N   found   RMS/CRB  (true sigma px, SNR >= 10)\n");
+    for (int b = 0; b + 1 < int(std::size(kWidthBins)); ++b) {
+      char label[32];
+      std::snprintf(label, sizeof label, "%.1f..%.1f", kWidthBins[b], std::min(kWidthBins[b + 1], 9.9));
+      score_bin(label, [](const TruthStar& t) { return t.sigma_px; }, kWidthBins[b], kWidthBins[b + 1], 10.0);
+    }
   }
   // Close pairs: both found, RMS along the pair axis, mean drift toward the neighbour.
   int members = 0, found = 0;
@@ -287,6 +307,8 @@ int main(int argc, char** argv) {
   int stars = 2000;
   std::string keep;
   bool run_sep = true;
+  double width_min_px = 0, width_max_px = 0;  // --width-px: 0 = every star the bench's width
+  double given_fwhm_px = 0;                    // --given-fwhm-px: 0 = the true (centre's) FWHM
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--no-sep") {  // SEP cannot take arrays over 2 GB (large scans)
@@ -297,6 +319,11 @@ int main(int argc, char** argv) {
     if (a == "--pixel-um") pixel_um = std::stod(argv[i + 1]);
     else if (a == "--stars") stars = std::stoi(argv[i + 1]);
     else if (a == "--keep") keep = argv[i + 1];
+    else if (a == "--given-fwhm-px") given_fwhm_px = std::stod(argv[i + 1]);
+    else if (a == "--width-px" && std::sscanf(argv[i + 1], "%lf:%lf", &width_min_px, &width_max_px) != 2) {
+      std::fprintf(stderr, "bench_stars: --width-px takes A:B (Gaussian sigma in px)\n");
+      return 2;
+    }
     ++i;
   }
   const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
@@ -329,13 +356,39 @@ int main(int argc, char** argv) {
 
   const DefinitionRegistry registry;
   const auto t0 = std::chrono::steady_clock::now();
-  const sim::SimulatedPlate plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(spec.str(), "bench spec"), registry);
+  sim::SimulatedPlate plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(spec.str(), "bench spec"), registry);
+  // The true sigma of every star image, px (--width-px: growing with the distance from the centre).
+  const double blur_px = blur_um / pixel_um;
+  std::vector<double> star_sigma_px(plate.scene.marks.size(), std::hypot(psf_sigma_um, blur_um) / pixel_um);
+  if (width_max_px > 0) {
+    if (!(width_min_px > blur_px && width_max_px >= width_min_px)) {
+      std::fprintf(stderr, "bench_stars: --width-px needs %.2f < A <= B\n", blur_px);
+      return 2;
+    }
+    const double cx = 0.5 * plate.scene.width_px, cy = 0.5 * plate.scene.height_px;
+    double r_max = 0;  // the farthest star from the centre
+    for (size_t i = 0; i < plate.truth.size(); ++i)
+      if (plate.truth[i].kind == PointKind::kStar && plate.truth_mark[i] >= 0) {
+        const sim::SceneMark& m = plate.scene.marks[plate.truth_mark[i]];
+        r_max = std::max(r_max, std::hypot(m.centre_px.x_px - cx, m.centre_px.y_px - cy));
+      }
+    for (size_t i = 0; i < plate.truth.size(); ++i) {
+      if (plate.truth[i].kind != PointKind::kStar || plate.truth_mark[i] < 0) continue;
+      sim::SceneMark& m = plate.scene.marks[plate.truth_mark[i]];
+      const double r = std::hypot(m.centre_px.x_px - cx, m.centre_px.y_px - cy) / r_max;
+      const double sigma_px = width_min_px + (width_max_px - width_min_px) * r;
+      star_sigma_px[plate.truth_mark[i]] = sigma_px;
+      m.psf_fwhm_um = 2.3548 * std::sqrt(sigma_px * sigma_px - blur_px * blur_px) * pixel_um;
+    }
+  }
+  const double start_fwhm_px = given_fwhm_px > 0 ? given_fwhm_px : width_max_px > 0 ? 2.3548 * width_min_px : fwhm_px;
   const std::vector<sim::MarkCramerRao> crb = sim::CramerRaoBounds(plate.scene);
   const std::string image_path = sim::WriteSimulatedPlate(plate, dir).image_path;
   const Image image = Image::Open(image_path);
   const long pixels = image.info().width_px * image.info().height_px;
-  std::printf("plate: %ld x %ld px 16-bit, %.0f um pixels, star FWHM %.2f px, rendered in %.1f s; %s\n",
-              image.info().width_px, image.info().height_px, pixel_um, fwhm_px,
+  std::printf("plate: %ld x %ld px 16-bit, %.0f um pixels, star FWHM %.2f..%.2f px (detectors given %.2f), rendered in %.1f s; %s\n",
+              image.info().width_px, image.info().height_px, pixel_um, width_max_px > 0 ? 2.3548 * width_min_px : fwhm_px,
+              width_max_px > 0 ? 2.3548 * width_max_px : fwhm_px, start_fwhm_px,
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), image_path.c_str());
 
   std::vector<TruthStar> truth;
@@ -351,6 +404,7 @@ int main(int argc, char** argv) {
     t.x = *p.x_px, t.y = *p.y_px;
     t.snr = std::abs(plate.scene.marks[plate.truth_mark[i]].amplitude_dn) / c.sigma_amplitude_dn;
     t.crb_x = c.sigma_x_px, t.crb_y = c.sigma_y_px;
+    t.sigma_px = star_sigma_px[plate.truth_mark[i]];
     t.id = p.id;
     t.saturated = std::find(p.flags.begin(), p.flags.end(), "saturated") != p.flags.end();
     t.pair = p.id.rfind("PA", 0) == 0 || p.id.rfind("PB", 0) == 0;
@@ -397,7 +451,6 @@ int main(int argc, char** argv) {
   for (TruthStar& t : truth)
     if (t.pair && !t.isolated) t.pair = false, t.isolated = false;  // pairs near other marks: not scored as pairs
   // Joint bound of each pair (true sigma of the star images, the simulator's noise).
-  const double true_sigma_px = std::hypot(psf_sigma_um, blur_um) / pixel_um;
   for (TruthStar& t : truth) {
     if (!t.pair) continue;
     const std::string other = (t.id[1] == 'A' ? "PB" : "PA") + t.id.substr(2);
@@ -407,15 +460,15 @@ int main(int argc, char** argv) {
         if (plate.truth[i].id == id) return std::abs(plate.scene.marks[plate.truth_mark[i]].amplitude_dn);
       return 0.0;
     };
-    const auto c = PairAxisCrb(t.x, t.y, flux(t.id), o.x, o.y, flux(other), true_sigma_px, 20.0 * 20.0 + 1.0 / 12.0);
+    const auto c = PairAxisCrb(t.x, t.y, flux(t.id), o.x, o.y, flux(other), t.sigma_px, 20.0 * 20.0 + 1.0 / 12.0);
     t.pair_crb_axis = std::sqrt(c.first);
   }
   std::printf("truth: %zu stars in the image, %d on dust or scratches\n", truth.size(), on_defects);
 
-  const Run ours = RunChild(self, "ours", image_path, dir + "/ours.txt", fwhm_px);
+  const Run ours = RunChild(self, "ours", image_path, dir + "/ours.txt", start_fwhm_px);
   Score("platemeter (DetectStars, PSF fit)", ours, truth, marks, pixels);
   if (run_sep) {
-    const Run sep = RunChild(self, "sep", image_path, dir + "/sep.txt", fwhm_px);
+    const Run sep = RunChild(self, "sep", image_path, dir + "/sep.txt", start_fwhm_px);
     Score("SEP (sep_background + sep_extract + sep_windowed)", sep, truth, marks, pixels);
   }
   if (keep.empty()) std::filesystem::remove_all(dir);

@@ -25,7 +25,7 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kArcsec = kPi / 648000.0;
 
-std::string Trim(const std::string& s) {
+std::string TrimSpace(const std::string& s) {
   const auto first = s.find_first_not_of(" \t\r\n");
   if (first == std::string::npos) return "";
   const auto last = s.find_last_not_of(" \t\r\n");
@@ -36,7 +36,7 @@ std::vector<std::string> SplitCsv(const std::string& line) {
   std::vector<std::string> out;
   std::string field;
   std::istringstream in(line);
-  while (std::getline(in, field, ',')) out.push_back(Trim(field));
+  while (std::getline(in, field, ',')) out.push_back(TrimSpace(field));
   if (!line.empty() && line.back() == ',') out.emplace_back();
   return out;
 }
@@ -136,7 +136,7 @@ std::vector<calib::CatalogStar> ReadStarListCsv(std::istream& in, const std::str
   int line_number = 0;
   while (std::getline(in, line)) {
     ++line_number;
-    const std::string trimmed = Trim(line);
+    const std::string trimmed = TrimSpace(line);
     if (trimmed.empty() || trimmed[0] == '#') continue;
     const std::string where = fmt::format("{} line {}", source, line_number);
     const std::vector<std::string> fields = SplitCsv(trimmed);

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "platemeter/batch/temporaries.h"
+#include "platemeter/core/number_text.h"
 
 namespace platemeter {
 namespace fs = std::filesystem;
@@ -17,12 +18,7 @@ const char* const kStatuses[] = {"measured", "rejected", "missing"};
 const char* const kKinds[] = {"reseau", "fiducial", "star", "trail_dot", "trail_dash", "passpoint"};
 
 // Shortest text that reads back as the same double (as the measurement file does).
-std::string Number(double v) {
-  char buffer[64];
-  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
-  return std::string(buffer, r.ptr);
-}
-std::string Number(const std::optional<double>& v) { return v ? Number(*v) : std::string(); }
+std::string OptionalText(const std::optional<double>& v) { return v ? ShortestText(*v) : std::string(); }
 
 int Count(const std::map<std::string, int>& counts, const std::string& key) {
   const auto it = counts.find(key);
@@ -84,9 +80,9 @@ std::string FormatSummaryCsv(const std::vector<ScanRecord>& records) {
     std::vector<std::string> row = {r.stem, r.scan, r.status, r.reason};
     for (const char* s : kStatuses) row.push_back(std::to_string(Count(r.counts_by_status, s)));
     for (const char* k : kKinds) row.push_back(std::to_string(Count(r.counts_by_kind, k)));
-    row.push_back(Number(r.reseau_rms_um));
-    row.push_back(Number(r.scale_x));
-    row.push_back(Number(r.scale_y));
+    row.push_back(OptionalText(r.reseau_rms_um));
+    row.push_back(OptionalText(r.scale_x));
+    row.push_back(OptionalText(r.scale_y));
     char seconds[32];
     std::snprintf(seconds, sizeof seconds, "%.3f", r.seconds);
     row.push_back(seconds);

@@ -10,18 +10,13 @@
 
 #include "platemeter/core/error.h"
 #include "platemeter/core/log.h"
+#include "platemeter/core/why.h"
 
 namespace platemeter::calib {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-constexpr double kMasToRad = kPi / (180.0 * 3600.0 * 1000.0);
-constexpr double kDegToRad = kPi / 180.0;
-
-bool Fail(std::string* why, const std::string& reason) {
-  if (why) *why = reason;
-  return false;
-}
+constexpr double kMasToRad = std::numbers::pi / (180.0 * 3600.0 * 1000.0);
+constexpr double kDegToRad = std::numbers::pi / 180.0;
 
 // ERFA wants dRA/dt (no cos dec); the catalogs give mu_alpha* = dRA/dt cos(dec).
 // At the pole itself dRA/dt is undefined: the tiny floor keeps it finite.
@@ -37,7 +32,7 @@ ObservingSite ObservingSite::Seed004CameraMount() {
 }
 
 bool ApparentPlaceOptions::Check(std::string* why) const {
-  if (!(std::abs(site.latitude_rad) <= kPi / 2))
+  if (!(std::abs(site.latitude_rad) <= std::numbers::pi / 2))
     return Fail(why, fmt::format("site latitude {} rad is outside -pi/2..pi/2", site.latitude_rad));
   if (!std::isfinite(site.longitude_rad)) return Fail(why, "site longitude is not finite");
   if (!(site.height_m > -1000.0 && site.height_m < 20000.0))
@@ -52,7 +47,7 @@ bool ApparentPlaceOptions::Check(std::string* why) const {
     return Fail(why, fmt::format("wavelength {} um is outside 0.1..1e6", wavelength_um));
   if (!(std::abs(ut1_minus_utc_s) < 1.0))
     return Fail(why, fmt::format("UT1-UTC {} s; IERS keeps |UT1-UTC| < 0.9 s", ut1_minus_utc_s));
-  const double one_arcsec = kPi / 648000.0;
+  const double one_arcsec = std::numbers::pi / 648000.0;
   if (!(std::abs(polar_motion_x_rad) < one_arcsec && std::abs(polar_motion_y_rad) < one_arcsec))
     return Fail(why, "polar motion must be below 1 arcsec (give radians, not arcsec)");
   return true;
@@ -100,7 +95,7 @@ ObservedPlace ApparentPlaceCalculator::Observe(const CatalogStar& star) const {
   eraAtioq(ri, di, astrom, &aob, &zob, &hob, &dob, &rob);
   ObservedPlace p;
   p.azimuth_rad = eraAnp(aob);
-  p.altitude_rad = kPi / 2 - zob;
+  p.altitude_rad = std::numbers::pi / 2 - zob;
   p.hour_angle_rad = eraAnpm(hob);
   p.declination_rad = dob;
   const double ca = std::cos(p.altitude_rad);

@@ -15,7 +15,7 @@
 namespace platemeter {
 namespace {
 
-constexpr const char* kSubject = "bundle input";
+constexpr const char* kBundleInputSubject = "bundle input";
 
 // Error at a record: "file:line" origins become Error(file, "line N: reason").
 [[noreturn]] void FailAt(const std::string& origin, const std::string& reason) {
@@ -24,9 +24,9 @@ constexpr const char* kSubject = "bundle input";
       origin.find_first_not_of("0123456789", colon + 1) == std::string::npos) {
     throw Error(origin.substr(0, colon), "line " + origin.substr(colon + 1) + ": " + reason);
   }
-  throw Error(origin.empty() ? kSubject : origin, reason);
+  throw Error(origin.empty() ? kBundleInputSubject : origin, reason);
 }
-[[noreturn]] void Fail(const std::string& reason) { throw Error(kSubject, reason); }
+[[noreturn]] void Fail(const std::string& reason) { throw Error(kBundleInputSubject, reason); }
 
 std::string Quoted(const std::string& s) { return "'" + s + "'"; }
 

@@ -15,6 +15,7 @@
 #include "platemeter/core/error.h"
 #include "platemeter/grids/registry.h"
 #include "toml_job_reader.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter {
 namespace {
@@ -23,7 +24,6 @@ using job_toml::Join;
 using job_toml::JobReader;
 using job_toml::LineOf;
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
 // Accepted ranges (docs/bundle-job.md, "Accepted ranges"): wide for any real
 // block, narrow enough that squares and products stay finite.

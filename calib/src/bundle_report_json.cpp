@@ -7,13 +7,13 @@
 #include "bundle_report_internal.h"
 #include "report_json.h"
 #include "platemeter/calib/bundle_report.h"
+#include "json_optional.h"
 
 namespace platemeter {
 namespace {
 
 using nlohmann::ordered_json;
 
-ordered_json Optional(const std::optional<double>& v) { return v ? ordered_json(*v) : ordered_json(nullptr); }
 
 ordered_json TestJson(const SignificanceTest& t) {
   return {{"terms", t.what},          {"statistic", t.statistic}, {"critical", t.critical},
@@ -31,7 +31,7 @@ ordered_json CameraJson(const BundleResult& result, size_t c) {
   ordered_json parameters = ordered_json::object();
   for (int i = 0; i < kBundleCameraParams; ++i) {
     parameters[kBundleCameraParamNames[i]] = {{"value", camera.values[i]},
-                                              {"sigma", Optional(camera.sigmas[i])},
+                                              {"sigma", calib_internal::OptionalJson(camera.sigmas[i])},
                                               {"status", EstimateStatusName(camera.status[i])}};
   }
   j["parameters"] = parameters;
@@ -98,7 +98,7 @@ std::string FormatCalibrationJson(const BundleResult& result, const BundleReport
     e["initial_values"] = f.initial_values;
     const double v[6] = {f.position_m.x(), f.position_m.y(), f.position_m.z(), f.angles.phi_rad, f.angles.omega_rad,
                          f.angles.kappa_rad};
-    for (int i = 0; i < 6; ++i) e[kBundleFrameParamNames[i]] = {{"value", v[i]}, {"sigma", Optional(f.sigmas[i])}};
+    for (int i = 0; i < 6; ++i) e[kBundleFrameParamNames[i]] = {{"value", v[i]}, {"sigma", calib_internal::OptionalJson(f.sigmas[i])}};
     std::vector<int> indices;
     for (const char* name : kBundleFrameParamNames) indices.push_back(a.Find("frame " + f.id, name));
     const Eigen::MatrixXd cov = a.Covariance(indices, true);

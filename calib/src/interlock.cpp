@@ -16,10 +16,7 @@
 namespace platemeter {
 namespace {
 
-constexpr const char* kSubject = "interlock";
-// Below this cos(phi) the first and third rotations are not separable
-// (as rotation_conventions.cpp).
-constexpr double kGimbalLockCos = 1e-9;
+constexpr const char* kInterlockSubject = "interlock";
 
 void CheckOptionsOrThrow(const InterlockOptions& options) {
   std::string why;
@@ -30,11 +27,11 @@ void CheckOptionsOrThrow(const InterlockOptions& options) {
 template <int N>
 void CheckCovarianceOrThrow(const Eigen::Matrix<double, N, N>& c, const char* what,
                             const InterlockOptions& options) {
-  if (!c.allFinite()) throw Error(kSubject, fmt::format("{} has non-finite elements", what));
+  if (!c.allFinite()) throw Error(kInterlockSubject, fmt::format("{} has non-finite elements", what));
   const double scale = c.diagonal().cwiseAbs().maxCoeff();
   const double asymmetry = (c - c.transpose()).cwiseAbs().maxCoeff();
   if (asymmetry > options.symmetry_tolerance * scale) {
-    throw Error(kSubject, fmt::format("{} is not symmetric (largest |C_ij - C_ji| = {:.3g}, "
+    throw Error(kInterlockSubject, fmt::format("{} is not symmetric (largest |C_ij - C_ji| = {:.3g}, "
                                       "largest diagonal {:.3g})",
                                       what, asymmetry, scale));
   }
@@ -44,7 +41,7 @@ void CheckCovarianceOrThrow(const Eigen::Matrix<double, N, N>& c, const char* wh
                                .eigenvalues();
   const double largest = std::max(eigenvalues.maxCoeff(), 0.0);
   if (eigenvalues.minCoeff() < -options.psd_tolerance * largest) {
-    throw Error(kSubject, fmt::format("{} is not positive semi-definite (eigenvalue {:.3g}, "
+    throw Error(kInterlockSubject, fmt::format("{} is not positive semi-definite (eigenvalue {:.3g}, "
                                       "largest {:.3g})",
                                       what, eigenvalues.minCoeff(), largest));
   }
@@ -56,10 +53,10 @@ Eigen::Matrix3d RotationOrThrow(const Eigen::Matrix3d& matrix, double max_deviat
   try {
     r = NearestRotation(matrix, max_deviation);
   } catch (const Error& e) {
-    throw Error(kSubject, "relative orientation matrix " + e.reason());
+    throw Error(kInterlockSubject, "relative orientation matrix " + e.reason());
   }
   if (std::hypot(r(2, 1), r(2, 2)) < kGimbalLockCos) {
-    throw Error(kSubject, "phi is +-90 deg: omega and kappa are not separable");
+    throw Error(kInterlockSubject, "phi is +-90 deg: omega and kappa are not separable");
   }
   return r;
 }
@@ -208,7 +205,7 @@ Eigen::Matrix3d AnglesFromSmallRotationJacobian(const OmegaPhiKappa& angles,
                                                 InterlockCovarianceKind kind) {
   const Eigen::Matrix3d r = MatrixFromOmegaPhiKappa(angles);
   if (std::hypot(r(2, 1), r(2, 2)) < kGimbalLockCos) {
-    throw Error(kSubject, "phi is +-90 deg: omega and kappa are not separable");
+    throw Error(kInterlockSubject, "phi is +-90 deg: omega and kappa are not separable");
   }
   return SmallRotationJacobianAt(r, kind);
 }

@@ -19,8 +19,8 @@ namespace platemeter {
 namespace {
 
 // c plus the largest parameter block of the common form (brown-affine: 7).
-constexpr int kMaxDim = 9;
-using Jet = ceres::Jet<double, kMaxDim>;
+constexpr int kMaxModelDim = 9;
+using Jet = ceres::Jet<double, kMaxModelDim>;
 
 bool EndsWith(const std::string& text, const std::string& suffix) {
   return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;

@@ -10,14 +10,14 @@
 
 #include "platemeter/calib/bundle_adjustment.h"
 #include "platemeter/core/error.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter {
 namespace {
 
-constexpr const char* kSubject = "precision simulation";
-constexpr double kRadPerDeg = M_PI / 180.0;
+constexpr const char* kPrecisionSimulationSubject = "precision simulation";
 
-[[noreturn]] void Throw(const std::string& why) { throw Error(kSubject, why); }
+[[noreturn]] void Throw(const std::string& why) { throw Error(kPrecisionSimulationSubject, why); }
 
 void CheckBlock(const PrecisionPlan& plan, const PrecisionBlock& block) {
   const BundleInput& in = block.input;

@@ -15,20 +15,11 @@
 
 #include "platemeter/calib/precision_simulation.h"
 #include "platemeter/core/error.h"
+#include "platemeter/core/why.h"
+#include "toml_job_reader.h"
 
 namespace platemeter {
 namespace {
-
-bool Fail(std::string* why, const std::string& text) {
-  if (why) *why = text;
-  return false;
-}
-
-std::string Join(const std::vector<std::string>& items) {
-  std::string out;
-  for (const std::string& item : items) out += (out.empty() ? "" : ", ") + item;
-  return out;
-}
 
 // Short names of the camera parameters, kBundleCameraParamNames order.
 constexpr std::array<const char*, kBundleCameraParams> kShortNames = {"c",  "xp", "yp", "k1", "k2",
@@ -47,7 +38,7 @@ class PlanReader {
     for (const auto& [name, node] : table) {
       const std::string key(name.str());
       if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-        Fail(&node, "unknown key '" + prefix + key + "' (known: " + Join(allowed) + "; docs/precision-simulation.md)");
+        Fail(&node, "unknown key '" + prefix + key + "' (known: " + job_toml::Join(allowed) + "; docs/precision-simulation.md)");
       }
     }
   }

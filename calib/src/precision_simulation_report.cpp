@@ -8,6 +8,7 @@
 #include "output_files.h"
 #include "platemeter/calib/precision_simulation.h"
 #include "platemeter/core/error.h"
+#include "json_optional.h"
 
 namespace platemeter {
 namespace {
@@ -58,7 +59,6 @@ std::string RollList(const std::vector<double>& rolls) {
   return fmt::format("{}", fmt::join(parts, " "));
 }
 
-ordered_json Optional(const std::optional<double>& v) { return v ? ordered_json(*v) : ordered_json(nullptr); }
 
 }  // namespace
 
@@ -161,7 +161,7 @@ std::string FormatPrecisionJson(const PrecisionSimulationResult& r) {
   if (plan.balance == RadialBalance::kZeroAtRadius) j["balance_radius_mm"] = plan.balance_radius_mm;
   j["corner_radius_mm"] = r.corner_radius_mm;
   ordered_json sigmas;
-  for (const Headline& h : Headlines(r)) sigmas[h.key + "_um"] = Optional(h.predicted);
+  for (const Headline& h : Headlines(r)) sigmas[h.key + "_um"] = calib_internal::OptionalJson(h.predicted);
   j["sigma_apriori"] = sigmas;
   if (!plan.reference.source.empty() || plan.reference.xp_um || plan.reference.c_prime_um) {
     ordered_json ref;
@@ -174,7 +174,7 @@ std::string FormatPrecisionJson(const PrecisionSimulationResult& r) {
   ordered_json camera = ordered_json::array();
   for (const PrecisionParameter& p : r.camera) {
     camera.push_back({{"name", p.name}, {"value", p.value}, {"status", EstimateStatusName(p.status)},
-                      {"sigma_apriori", Optional(p.sigma)}});
+                      {"sigma_apriori", calib_internal::OptionalJson(p.sigma)}});
   }
   j["camera"] = camera;
   j["calibrated_focal_length_mm"] = {{"value", r.calibrated_focal_length_mm.value},

@@ -11,9 +11,6 @@
 namespace platemeter {
 namespace {
 
-// Below this cos(phi) the first and third rotations are not separable.
-constexpr double kGimbalLockCos = 1e-9;
-
 Eigen::Matrix3d FromRowMajor(const double* m) {
   Eigen::Matrix3d out;
   out << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];

@@ -12,7 +12,6 @@
 namespace platemeter::calib::detail {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 
 std::string_view Trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
@@ -77,7 +76,7 @@ void ReadTextStarCatalog(std::ifstream& in, const std::string& path, const StarS
     if (!Sexagesimal(line, 1, 9, false, &ra_h) || ra_h >= 24.0) bad("malformed RA (columns 1-9, hhmmss.ss)");
     if (!Sexagesimal(line, 11, 19, true, &dec_deg) || std::abs(dec_deg) > 90.0)
       bad("malformed Dec (columns 11-19, sddmmss.s)");
-    const double ra = ra_h * kPi / 12.0, dec = dec_deg * kPi / 180.0;
+    const double ra = ra_h * std::numbers::pi / 12.0, dec = dec_deg * std::numbers::pi / 180.0;
     if (!select.KeepPosition(ra, dec)) continue;
 
     CatalogStar s;

@@ -10,6 +10,7 @@
 #include "platemeter/core/log.h"
 #include "platemeter/measure/measurement_file.h"
 #include "toml_job_reader.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter {
 namespace {
@@ -18,7 +19,6 @@ using job_toml::JobReader;
 using job_toml::Join;
 using job_toml::LineOf;
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr double kRobustScaleSigma = 3.0;  // Cauchy scale of the first pass
 
 // The site and atmosphere of [site], overridden per plate by the same keys.

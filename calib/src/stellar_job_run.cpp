@@ -7,11 +7,11 @@
 
 #include "platemeter/calib/stellar_job.h"
 #include "platemeter/core/error.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter {
 namespace {
 
-constexpr double kRadPerDeg = M_PI / 180.0;
 
 StellarCatalog LoadCatalog(const StellarJob& job) {
   calib::StarQueryOptions query;

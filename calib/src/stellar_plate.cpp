@@ -10,6 +10,7 @@
 
 #include "platemeter/core/error.h"
 #include "stellar_internal.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter {
 namespace {
@@ -17,8 +18,6 @@ namespace {
 using stellar_internal::PlateBlocks;
 using stellar_internal::PreparedPlate;
 
-constexpr double kRadToArcsec = 180.0 * 3600.0 / M_PI;
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 int Index(const AdjustmentResult& result, const std::string& block, const std::string& name) {
   const int i = result.Find(block, name);
@@ -48,11 +47,11 @@ OrientationSetResult OrientationOf(const AdjustmentResult& result, const std::st
   set.camera_from_enu = MatrixFromOmegaPhiKappa(angles) * m0;
   const Eigen::Vector3d axis = set.camera_from_enu.row(2).transpose();
   const Eigen::Vector3d plate_x = set.camera_from_enu.row(0).transpose();
-  set.axis_azimuth_deg = std::atan2(axis.x(), axis.y()) * kRadToDeg;
+  set.axis_azimuth_deg = std::atan2(axis.x(), axis.y()) * kDegPerRad;
   if (set.axis_azimuth_deg < 0) set.axis_azimuth_deg += 360.0;
-  set.axis_altitude_deg = std::asin(std::clamp(axis.z(), -1.0, 1.0)) * kRadToDeg;
-  set.roll_deg = std::atan2(plate_x.y(), plate_x.x()) * kRadToDeg;
-  for (int k = 0; k < 3; ++k) set.sigma_arcsec[k] = SigmaOf(result, omega + k) * kRadToArcsec;
+  set.axis_altitude_deg = std::asin(std::clamp(axis.z(), -1.0, 1.0)) * kDegPerRad;
+  set.roll_deg = std::atan2(plate_x.y(), plate_x.x()) * kDegPerRad;
+  for (int k = 0; k < 3; ++k) set.sigma_arcsec[k] = SigmaOf(result, omega + k) * kArcsecPerRad;
   return set;
 }
 
@@ -102,7 +101,7 @@ StellarPlateResult ReadResult(const StellarPlate& plate, const PreparedPlate& pr
   for (const auto& a : out.orientation_sets) {
     for (const auto& b : out.orientation_sets) {
       const double angle = Eigen::AngleAxisd(a.camera_from_enu * b.camera_from_enu.transpose()).angle();
-      out.largest_motion_arcsec = std::max(out.largest_motion_arcsec, angle * kRadToArcsec);
+      out.largest_motion_arcsec = std::max(out.largest_motion_arcsec, angle * kArcsecPerRad);
     }
   }
   for (const auto& star : prepared.stars) (star.known ? out.catalog_stars : out.unknown_stars) += 1;

@@ -4,11 +4,11 @@
 
 #include "platemeter/calib/stellar_report.h"
 #include "platemeter/core/error.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 // Seed 001's printed (left-handed) frame and units: an orbigon-11 lens in the
 // form of the builtin orbigon definition.
@@ -54,8 +54,8 @@ PrintedCamera ToPrinted(const StellarCamera& values, const StellarCamera& sigmas
   out.value[4] = 1e3 * (p[4] + p[2]);
   out.sigma[3] *= 1e3;
   out.sigma[4] *= 1e3;
-  out.value[10] *= kRadToDeg;
-  out.sigma[10] *= kRadToDeg;
+  out.value[10] *= kDegPerRad;
+  out.sigma[10] *= kDegPerRad;
   return out;
 }
 

@@ -5,11 +5,11 @@
 
 #include "platemeter/calib/stellar_report.h"
 #include "platemeter/core/text_document.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter {
 namespace {
 
-constexpr double kRadToArcsec = 180.0 * 3600.0 / M_PI;
 
 // Seed 001 prints K as mantissa and power of ten ("+3.1602-1"); we print 5 significant digits.
 std::string Value(const ReportedCamera& c, int i) {
@@ -55,8 +55,8 @@ void Table2(DistortionModelId lens, const StellarJobResult& result, TextDocument
   AddRow(&t, "star images", plates, [](const StellarPlateResult& s) { return std::to_string(s.images); });
   AddRow(&t, "rejected images", plates, [](const StellarPlateResult& s) { return std::to_string(s.rejected_images); });
   AddRow(&t, "epsilon (sec arc)", plates, [&](const StellarPlateResult& s) {
-    return fmt::format("{:+.2f} +- {:.2f}", epsilon_sign * s.epsilon_rad * kRadToArcsec,
-                       s.epsilon_sigma_rad * kRadToArcsec);
+    return fmt::format("{:+.2f} +- {:.2f}", epsilon_sign * s.epsilon_rad * kArcsecPerRad,
+                       s.epsilon_sigma_rad * kArcsecPerRad);
   });
   AddRow(&t, "Cx (um)", plates,
          [](const StellarPlateResult& s) { return fmt::format("{:.2f} +- {:.2f}", 1e3 * s.cx_mm, 1e3 * s.cx_sigma_mm); });

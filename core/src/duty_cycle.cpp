@@ -6,14 +6,10 @@
 #include <fmt/format.h>
 
 #include "platemeter/core/error.h"
+#include "platemeter/core/why.h"
 
 namespace platemeter {
 namespace {
-
-bool Fail(std::string* why, const std::string& reason) {
-  if (why) *why = reason;
-  return false;
-}
 
 }  // namespace
 

@@ -7,16 +7,17 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <numbers>
 
 #include "platemeter/core/error.h"
 #include "platemeter/detect/overview.h"
 
 #include "masked_pixels.h"
+#include "orientation_matrix.h"
 
 namespace platemeter {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // One mark to find: where it is on the plate and how it is drawn.
 struct Target {
@@ -61,13 +62,6 @@ std::vector<Target> TargetsOf(const CameraDefinition& camera, const FiducialSet*
     }
   }
   return targets;
-}
-
-Eigen::Matrix2d OrientationMatrix(const ScanOrientation& o) {
-  const std::array<int, 4> m = o.PixelAxesFromPlate();
-  Eigen::Matrix2d matrix;
-  matrix << m[0], m[1], m[2], m[3];
-  return matrix;
 }
 
 Eigen::Matrix2d MatrixOf(const PlateToPixel& m) {
@@ -345,7 +339,7 @@ std::vector<LayoutHypothesis> PlaceLayout(const Image& image, const std::vector<
   std::vector<std::vector<int>> template_of(orientations.size(), std::vector<int>(targets.size()));
   double largest_px = 0.0, thinnest_px = 1e300;
   for (size_t o = 0; o < orientations.size(); ++o) {
-    const Eigen::Matrix2d a = nominal_px_per_mm * OrientationMatrix(orientations[o]);
+    const Eigen::Matrix2d a = nominal_px_per_mm * detect_internal::OrientationMatrix(orientations[o]);
     for (size_t t = 0; t < targets.size(); ++t) {
       const PixelShape s = ShapeOnScan(targets[t], a);
       const std::string key = TemplateKey(s);
@@ -381,10 +375,10 @@ std::vector<LayoutHypothesis> PlaceLayout(const Image& image, const std::vector<
   *candidate_count = static_cast<int>(candidates.size());
 
   const double match_px = std::max(options.match_radius_mm * nominal_px_per_mm, 2.0 * factor);
-  const double max_rotation_rad = options.max_rotation_deg * kPi / 180.0;
+  const double max_rotation_rad = options.max_rotation_deg * std::numbers::pi / 180.0;
   std::vector<LayoutHypothesis> best(orientations.size());
   for (size_t o = 0; o < orientations.size(); ++o) {
-    const Eigen::Matrix2d a0 = OrientationMatrix(orientations[o]);
+    const Eigen::Matrix2d a0 = detect_internal::OrientationMatrix(orientations[o]);
     std::vector<Eigen::Vector2d> q(targets.size());
     for (size_t t = 0; t < targets.size(); ++t) q[t] = a0 * Eigen::Vector2d(targets[t].x_mm, targets[t].y_mm);
     best[o].orientation = orientations[o];
@@ -454,7 +448,7 @@ std::vector<LayoutHypothesis> PlaceLayout(const Image& image, const std::vector<
 // Chi-square of the measured marks against one layout hypothesis (ids as that hypothesis assigns them).
 double LayoutChi2(const std::vector<Target>& targets, const std::vector<DetectedPoint>& measured,
                   const LayoutHypothesis& h, double match_px, double floor_px, int* pairs) {
-  const Eigen::Matrix2d a0 = OrientationMatrix(h.orientation);
+  const Eigen::Matrix2d a0 = detect_internal::OrientationMatrix(h.orientation);
   std::vector<Eigen::Vector2d> plate, pixel;
   std::vector<double> weights;
   for (const Target& t : targets) {
@@ -482,7 +476,7 @@ ScanOrientation OrientationOf(const PlateToPixel& map) {
   ScanOrientation best;
   double best_d = 1e300;
   for (const ScanOrientation& o : ScanOrientation::All()) {
-    const Eigen::Matrix2d a0 = OrientationMatrix(o);
+    const Eigen::Matrix2d a0 = detect_internal::OrientationMatrix(o);
     const double d = (a / std::sqrt(std::abs(a.determinant())) - a0).norm();
     if (d < best_d) best_d = d, best = o;
   }

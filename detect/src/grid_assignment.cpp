@@ -1,4 +1,5 @@
 #include "platemeter/detect/grid_assignment.h"
+#include "orientation_matrix.h"
 
 #include <Eigen/Geometry>
 
@@ -6,11 +7,11 @@
 #include <cmath>
 #include <sstream>
 #include <unordered_map>
+#include <numbers>
 
 namespace platemeter {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Candidates bucketed on a square grid of cell `cell_px`, for nearest-within-radius queries.
 class CandidateIndex {
@@ -49,13 +50,6 @@ class CandidateIndex {
   double cell_px_;
   std::unordered_map<long long, std::vector<int>> buckets_;
 };
-
-Eigen::Matrix2d OrientationMatrix(const ScanOrientation& o) {
-  const std::array<int, 4> m = o.PixelAxesFromPlate();
-  Eigen::Matrix2d matrix;
-  matrix << m[0], m[1], m[2], m[3];
-  return matrix;
-}
 
 double MedianNearestNeighbourMm(const MasterGrid& grid) {
   std::vector<double> distances;
@@ -101,9 +95,9 @@ Lattice MeasureLattice(const std::vector<CrossCandidate>& candidates, const std:
   const int bins = 1440;
   std::vector<double> histogram(bins, 0.0);
   for (double a : angles) {
-    double w = std::fmod(4 * a, 2 * kPi);
-    if (w < 0) w += 2 * kPi;
-    histogram[static_cast<int>(w / (2 * kPi) * bins) % bins] += 1.0;
+    double w = std::fmod(4 * a, 2 * std::numbers::pi);
+    if (w < 0) w += 2 * std::numbers::pi;
+    histogram[static_cast<int>(w / (2 * std::numbers::pi) * bins) % bins] += 1.0;
   }
   int peak = 0;
   double peak_value = -1;
@@ -115,12 +109,12 @@ Lattice MeasureLattice(const std::vector<CrossCandidate>& candidates, const std:
       peak = b;
     }
   }
-  const double peak_angle = (peak + 0.5) / bins * 2 * kPi;
+  const double peak_angle = (peak + 0.5) / bins * 2 * std::numbers::pi;
   double sum_sin = 0, sum_cos = 0;
   std::vector<double> kept_lengths;
   for (size_t i = 0; i < angles.size(); ++i) {
     const double w = 4 * angles[i];
-    if (std::cos(w - peak_angle) > std::cos(4.0 * kPi / 180.0)) {  // within 1 degree of the peak
+    if (std::cos(w - peak_angle) > std::cos(4.0 * std::numbers::pi / 180.0)) {  // within 1 degree of the peak
       sum_sin += std::sin(w);
       sum_cos += std::cos(w);
       kept_lengths.push_back(lengths[i]);
@@ -213,7 +207,7 @@ GridAssignment AssignGrid(const std::vector<CrossCandidate>& candidates, const M
     const Eigen::Rotation2Dd scanner(lattice.rotation_rad);
     const int seeds = std::min<int>(options.hypothesis_candidates, static_cast<int>(members.size()));
     for (const ScanOrientation& orientation : orientations) {
-      const Eigen::Matrix2d o = OrientationMatrix(orientation);
+      const Eigen::Matrix2d o = detect_internal::OrientationMatrix(orientation);
       const Eigen::Matrix2d a = lattice.scale_px_per_mm * scanner.toRotationMatrix() * o;
       GridHypothesis best;
       best.orientation = orientation;
@@ -247,7 +241,7 @@ GridAssignment AssignGrid(const std::vector<CrossCandidate>& candidates, const M
       bests.push_back(best);
     }
     if (bests.empty()) continue;
-    result.lattice_rotation_deg = lattice.rotation_rad * 180 / kPi;
+    result.lattice_rotation_deg = lattice.rotation_rad * 180 / std::numbers::pi;
     result.lattice_scale_px_per_mm = lattice.scale_px_per_mm;
   }
   if (bests.empty()) {

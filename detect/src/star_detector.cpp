@@ -119,6 +119,50 @@ DetectedStar Defect(double x, double y, const std::string& why) {
   return d;
 }
 
+// How far a single image's profile is from the fitted Gaussian: the residual's excess RMS (beyond the
+// noise) as a fraction of the image's flux, scaled by its width so that a fixed shape (a disk, a Moffat
+// star) gives one value at any flux or width: sqrt(chi^2 - dof) x noise x sigma / flux. 0 when the
+// excess is within kMisfitChi2Sigmas of the chi^2's own spread (a Gaussian image within its noise).
+constexpr double kMisfitChi2Sigmas = 5.0;
+double ProfileMisfit(const GaussianFitResult& fit, const FittedGaussian& g, double noise_dn) {
+  const double dof = std::max(1, fit.pixels - 5), excess = fit.chi2 - dof;
+  if (excess <= kMisfitChi2Sigmas * std::sqrt(2.0 * dof) || g.flux_dn <= 0) return 0.0;
+  return std::sqrt(excess) * noise_dn * g.sigma_px / g.flux_dn;
+}
+
+// Star widths on one plate vary (a wide-angle lens's images grow toward the corners, focus and tilt
+// vary): psf_fwhm_px is a starting value, and a fitted width is judged against the plate's width model
+// (star_width_model.h). While the bands are measured, before the model is settled, a width is kept
+// when it lies within kStartWidthSpread times the defect limits of the starting value. Trail mode has
+// no model: the limits are the starting value's.
+constexpr double kStartWidthSpread = 2.0;
+bool WidthPlausible(const StarDetectorOptions& o, double ratio_to_start) {
+  const double spread = o.max_dash_length_px > 0 ? 1.0 : kStartWidthSpread;
+  return ratio_to_start <= spread * o.max_fwhm_ratio && ratio_to_start >= o.min_fwhm_ratio / spread;
+}
+
+// The shape tests against the plate's own stars (point images only; trail mode keeps its start-value
+// tests, whose dashes and dots the model does not describe): an image wider than max_fwhm_ratio or
+// narrower than min_fwhm_ratio times the model's width at its place, or whose profile departs from a
+// Gaussian kMisfitFactor times more than the bright stars' do (a dust disk as wide as the stars: flat,
+// sharp-edged), is a defect.
+constexpr double kMisfitFactor = 3.0;
+constexpr double kMisfitFloor = 0.01;  // a star's shape is not known better than this
+void JudgeShapes(const StarDetectorOptions& o, const StarWidthModel& running, std::vector<DetectedStar>* stars,
+                 StarDetectionStats* stats) {
+  if (o.max_dash_length_px > 0) return;
+  const StarWidthModel model = SettleStarWidthModel(*stars, running);
+  for (DetectedStar& d : *stars) {
+    if (d.point.status != PointStatus::kMeasured || d.length_px > 0) continue;
+    const double ratio = d.fwhm_px / kFwhmPerSigma / model.SigmaAt(d.point.position_px.x_px, d.point.position_px.y_px);
+    const bool misfit = d.profile_misfit > std::max(kMisfitFloor, kMisfitFactor * model.profile_misfit);
+    if (ratio <= o.max_fwhm_ratio && ratio >= o.min_fwhm_ratio && !misfit) continue;
+    d.point.status = PointStatus::kRejected, d.point.reason = "shape", d.flags |= kStarDefect;
+    if (stats) ++stats->defects;
+  }
+  if (stats) stats->width_model = model;
+}
+
 // Distance from (x, y) to the nearer arm line of the cross centred at m (options.mask_arm_axes_px).
 double ArmDistance_px(const StarDetectorOptions& o, const PixelPoint& m, double x_px, double y_px) {
   const double dx = x_px - m.x_px, dy = y_px - m.y_px;
@@ -255,7 +299,8 @@ void MeasureSegment(const SweepMoments& m, const std::vector<FitPixel>& pixels, 
   result->push_back(d);
 }
 
-void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<DetectedStar>* out, StarDetectionStats* stats) {
+void ProcessBand(const Band& b, const StarDetectorOptions& o, const StarWidthModel& width_model, std::vector<DetectedStar>* out,
+                 StarDetectionStats* stats) {
   const double sign = o.dark ? -1.0 : 1.0;
   const double psf_sigma = o.psf_fwhm_px / kFwhmPerSigma;
   const BackgroundMesh mesh =
@@ -392,9 +437,12 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
       result.push_back(line);
       return;
     }
+    // The width expected here: the plate's model from the bands measured so far (the start value until
+    // there are bright stars to fit it to).
+    const double image_sigma = width_model.SigmaAt(px, peak_y_abs);
     // Fit window: the component grown by the PSF, and at least +-3 sigma around the peak.
-    const int grow = static_cast<int>(std::ceil(psf_sigma)) + 1;
-    const int half = static_cast<int>(std::ceil(3.0 * psf_sigma)) + 1;
+    const int grow = static_cast<int>(std::ceil(image_sigma)) + 1;
+    const int half = static_cast<int>(std::ceil(3.0 * image_sigma)) + 1;
     int x0 = std::min(bx, px - half) - grow, x1 = std::max(bx + bw, px + half + 1) + grow;
     int y0 = std::min(by, py - half) - grow, y1 = std::max(by + bh, py + half + 1) + grow;
     x0 = std::max(x0, px - window_reach), x1 = std::min(x1, px + window_reach + 1);
@@ -451,13 +499,13 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
     FittedGaussian start;
     start.x_px = px;
     start.y_px = peak_y_abs;
-    start.sigma_px = psf_sigma;
-    start.flux_dn = std::max(4.0 * M_PI * psf_sigma * psf_sigma * best, 2.0 * M_PI * psf_sigma * psf_sigma * peak_contrast);
-    const double min_sigma = o.min_fwhm_ratio * psf_sigma * 0.5;
+    start.sigma_px = image_sigma;
+    start.flux_dn = std::max(4.0 * M_PI * image_sigma * image_sigma * best, 2.0 * M_PI * image_sigma * image_sigma * peak_contrast);
+    const double min_sigma = o.min_fwhm_ratio * image_sigma * 0.5;
     GaussianFitResult fit = star_internal::FitGaussians(pixels, {start}, noise, min_sigma);
     if (fit.stars.empty()) return;
     const int dof1 = fit.pixels - 5;
-    const double ratio1 = fit.stars[0].sigma_px / psf_sigma;
+    const double ratio1 = fit.stars[0].sigma_px / image_sigma;
     bool blended = false;
     // A second star is tried when the single one is too wide for its SNR or
     // leaves a chi^2 excess of 5 sigma.
@@ -471,7 +519,7 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
       double sxx = 0, syy = 0, sxy = 0, w = 0;
       for (const FitPixel& p : pixels) {
         const double dx = p.x_px - cx, dy = p.y_px - cy;
-        if (p.value_dn <= 0 || dx * dx + dy * dy > 36 * psf_sigma * psf_sigma) continue;
+        if (p.value_dn <= 0 || dx * dx + dy * dy > 36 * image_sigma * image_sigma) continue;
         w += p.value_dn, sxx += p.value_dn * dx * dx, syy += p.value_dn * dy * dy, sxy += p.value_dn * dx * dy;
       }
       if (w > 0) {
@@ -498,18 +546,18 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
                                                                     (g.sigma_px * g.sigma_px)) / (2 * M_PI * g.sigma_px * g.sigma_px);
             if (p.value_dn - model > worst) worst = p.value_dn - model, second.x_px = p.x_px, second.y_px = p.y_px;
           }
-          second.flux_dn = std::max(worst, 0.0) * 2 * M_PI * psf_sigma * psf_sigma;
+          second.flux_dn = std::max(worst, 0.0) * 2 * M_PI * image_sigma * image_sigma;
           FittedGaussian first = g;
-          first.sigma_px = psf_sigma;
+          first.sigma_px = image_sigma;
           GaussianFitResult alt = star_internal::FitGaussians(pixels, {first, second}, noise, min_sigma);
           if (alt.stars.size() == 2 && (pair.stars.size() != 2 || alt.chi2 < pair.chi2)) pair = std::move(alt);
         }
         if (pair.stars.size() == 2 && fit.chi2 - pair.chi2 > o.pair_chi2_gain) {
           bool ok = true;
-          for (const FittedGaussian& g : pair.stars) {
-            const double r = g.sigma_px / psf_sigma;
-            if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn || r > o.max_fwhm_ratio || r < o.min_fwhm_ratio) ok = false;
-          }
+          for (const FittedGaussian& g : pair.stars)
+            if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn || g.sigma_px > o.max_fwhm_ratio * image_sigma ||
+                g.sigma_px < o.min_fwhm_ratio * image_sigma)
+              ok = false;  // a pair of star images, each of the width expected here (not a cross's arms)
           if (std::hypot(pair.stars[0].x_px - pair.stars[1].x_px, pair.stars[0].y_px - pair.stars[1].y_px) < 0.7 * o.psf_fwhm_px)
             ok = false;
           if (ok) fit = std::move(pair), blended = true;
@@ -517,20 +565,25 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, std::vector<Detect
       }
     }
     for (const FittedGaussian& g : fit.stars) {
-      const double ratio = g.sigma_px / psf_sigma;
-      if (ratio > o.max_fwhm_ratio || ratio < o.min_fwhm_ratio) {
+      // Noise first: a fit below the SNR limit is no image at all, not a defect worth a row.
+      if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn) continue;
+      // Width: only the implausible here; the test against the plate's width model at the image's
+      // place follows once every band is measured (JudgeShapes).
+      if (!WidthPlausible(o, g.sigma_px / psf_sigma)) {
         result.push_back(Defect(g.x_px, g.y_px, "shape"));
         continue;
       }
-      if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn) continue;
       if (g.x_px < x0 - 0.5 || g.x_px > x1 - 0.5 || g.y_px < b.y0_abs + y0 - 0.5 || g.y_px > b.y0_abs + y1 - 0.5) continue;
       DetectedStar d = MeasuredImage(g.x_px, g.y_px, g.sigma_x_px, g.sigma_y_px, g.correlation_xy, g.flux_dn,
                                      g.sigma_flux_dn, mesh.LevelAt(g.x_px, g.y_px - b.y0_abs) + sign * fit.offset_dn);
       d.peak_dn = g.flux_dn / (2.0 * M_PI * g.sigma_px * g.sigma_px);
       d.fwhm_px = g.sigma_px * kFwhmPerSigma;
-      if (!blended) d.ellipticity = Ellipticity(pixels, g.x_px, g.y_px, fit.offset_dn, std::max(g.sigma_px, psf_sigma));
+      if (!blended) {
+        d.ellipticity = Ellipticity(pixels, g.x_px, g.y_px, fit.offset_dn, std::max(g.sigma_px, image_sigma));
+        d.profile_misfit = ProfileMisfit(fit, g, noise);
+      }
       if (!blended && o.windowed_centroid) {
-        const Windowed w = WindowedCentroid(pixels, g.x_px, g.y_px, fit.offset_dn, psf_sigma, fit.residual_sigma_dn);
+        const Windowed w = WindowedCentroid(pixels, g.x_px, g.y_px, fit.offset_dn, image_sigma, fit.residual_sigma_dn);
         if (w.ok) {
           d.point.position_px = {w.x, w.y};
           d.point.sigma_x_px = w.sigma_x, d.point.sigma_y_px = w.sigma_y, d.point.correlation_xy = 0.0;
@@ -634,7 +687,9 @@ std::vector<DetectedStar> DetectStarsInBuffer(const float* values_dn, long width
   b.high_dn = options.saturation_dn.value_or(full_scale_dn);
   b.low_dn = options.floor_dn;
   std::vector<DetectedStar> stars;
-  ProcessBand(b, options, &stars, stats);
+  const StarWidthModel start = StartWidthModel(width_px, height_px, options.psf_fwhm_px / kFwhmPerSigma);
+  ProcessBand(b, options, start, &stars, stats);
+  JudgeShapes(options, start, &stars, stats);
   Finish(&stars);
   return stars;
 }
@@ -647,6 +702,7 @@ std::vector<DetectedStar> DetectStars(const Image& image, const StarDetectorOpti
   const long margin = cell;  // fit windows reach at most 40 px beyond a component
   std::vector<float> buffer;
   std::vector<DetectedStar> stars;
+  StarWidthModel width_model = StartWidthModel(width, height, options.psf_fwhm_px / kFwhmPerSigma);
   long have_y0 = 0, have_y1 = 0;  // rows in the buffer from the previous band
   for (long yc = 0; yc < height; yc += band) {
     Band b;
@@ -666,8 +722,11 @@ std::vector<DetectedStar> DetectStars(const Image& image, const StarDetectorOpti
     b.image_height = height;
     b.high_dn = options.saturation_dn.value_or(image.info().full_scale_dn);
     b.low_dn = options.floor_dn;
-    ProcessBand(b, options, &stars, stats);
+    ProcessBand(b, options, width_model, &stars, stats);
+    // Refined band by band: the pair test and the fits' starts use the width expected at each image.
+    if (options.max_dash_length_px == 0) width_model = SettleStarWidthModel(stars, width_model, 1);
   }
+  JudgeShapes(options, width_model, &stars, stats);
   Finish(&stars);
   return stars;
 }

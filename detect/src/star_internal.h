@@ -4,9 +4,11 @@
 
 #include <opencv2/core.hpp>
 
+#include "platemeter/detect/star_width_model.h"
+
 namespace platemeter::star_internal {
 
-constexpr double kFwhmPerSigma = 2.3548200450309493;  // a Gaussian's FWHM per sigma
+using ::platemeter::kFwhmPerSigma;
 
 // Background and noise of a band on a mesh of cells (absolute cell rows).
 struct BackgroundMesh {

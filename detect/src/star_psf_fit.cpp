@@ -8,11 +8,11 @@
 #include <numbers>
 
 #include "star_internal.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter::star_internal {
 namespace {
 
-constexpr double kInvSqrt2 = 0.70710678118654752440;
 
 // Integral of a unit 1-D Gaussian (centre c, sigma s) over the pixel [u - 1/2, u + 1/2]
 // and its derivatives with respect to c and s.

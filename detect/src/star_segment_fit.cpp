@@ -11,12 +11,11 @@
 #include <numbers>
 
 #include "star_internal.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter::star_internal {
 namespace {
 
-constexpr double kInvSqrt2 = 0.70710678118654752440;
-constexpr double kInvSqrt2Pi = 0.39894228040143267794;
 constexpr double kMinHalfLength = 0.05;  // px; below this the segment is a point (the model's limit is smooth)
 
 // The unit-flux profile of a segment (half length h, PSF sigma widened by the pixel: se) at a pixel a along

@@ -13,7 +13,7 @@
 namespace platemeter::trail_internal {
 
 namespace {
-constexpr double kNotDecodedTolerances = 2.5, kSlowTolerances = 4.0;  // DecodeByFlow's slow stars, below
+constexpr double kFlowNotDecodedTolerances = 2.5, kSlowTolerances = 4.0;  // DecodeByFlow's slow stars, below
 // A second trail's images must sit where the first trail's do: the seed's own position error shifts a
 // right reading's predictions alike everywhere (whole V <= 8 plate: of 209 unique readings' dashless second
 // trails, 193 within 0.15 px of their first trail's offset); another star's dots lined up by a wrong reading
@@ -141,7 +141,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   // reading lands near its own images. Under 2.5 tolerances it is not decoded; under 4 it must show more
   // (a trail of 12, 8 dots of a second trail, 5 durations: with the usual evidence the whole V <= 8 plate had
   // 19 wrong tags, a lone trail read under another number with 4 chance dots of a "second trail").
-  if (10.0 * speed < kNotDecodedTolerances * o.flow_tolerance_px) return false;
+  if (10.0 * speed < kFlowNotDecodedTolerances * o.flow_tolerance_px) return false;
   const bool slow = 10.0 * speed < kSlowTolerances * o.flow_tolerance_px;
   if (slow && blended) return false;  // (a slow star's wrong readings land near its own images: no flux from them)
   const bool crowded = o.flow_crowded_readings && !slow;  // the crowd's weaker evidence (below)

@@ -41,7 +41,7 @@ const ShutterExposure* ExposureOf(const std::vector<ShutterExposure>& trail, con
 }
 
 // One dot to try: where the track puts it.
-struct Candidate {
+struct ForcedCandidate {
   int chain = 0;
   const ShutterExposure* exposure = nullptr;
   PixelPoint predicted;
@@ -103,7 +103,7 @@ MeasuredDot Refused(Outcome why) {
 }
 
 // Fits the dot at its prediction (outcome kMeasured: it is there).
-MeasuredDot MeasureDot(const ScanPixels& scan, const Candidate& c, const ForcedDotOptions& o) {
+MeasuredDot MeasureDot(const ScanPixels& scan, const ForcedCandidate& c, const ForcedDotOptions& o) {
   const double half_px = 0.5 * c.length_px + o.window_fwhm * c.fwhm_px;
   PixelRect rect;
   if (!detect_internal::WindowAbout(scan, c.predicted, half_px, &rect)) return Refused(Outcome::kOutside);
@@ -196,7 +196,7 @@ std::vector<ForcedDot> MeasureMissingDots(const ScanPixels& scan, const std::vec
   }
   const Grid all(p, ids, 32.0);
 
-  std::vector<Candidate> candidates;
+  std::vector<ForcedCandidate> candidates;
   for (int k = 0; k < static_cast<int>(linked.chains.size()); ++k) {
     const TrailChain& chain = linked.chains[k];
     if (chain.trail <= 0 || chain.decoded_by == "flow_fill") continue;
@@ -207,7 +207,7 @@ std::vector<ForcedDot> MeasureMissingDots(const ScanPixels& scan, const std::vec
       if (e.kind != ExposureKind::kDot) continue;
       const double beyond_s = std::max(m.t0_s - e.mid_s, e.mid_s - m.t1_s);
       if (m.has_dot[e.dot_index] || beyond_s > o.max_extrapolation_s) continue;
-      Candidate c;
+      ForcedCandidate c;
       c.chain = k, c.exposure = &e;
       c.predicted = m.track.At(e.mid_s);
       double sx = 0, sy = 0;
@@ -254,11 +254,11 @@ std::vector<ForcedDot> MeasureMissingDots(const ScanPixels& scan, const std::vec
   // Two trails' predicted dots near each other (crossing trails): neither is measured.
   std::vector<PixelPoint> cp;
   std::vector<int> cids;
-  for (const Candidate& c : candidates) cids.push_back(static_cast<int>(cp.size())), cp.push_back(c.predicted);
+  for (const ForcedCandidate& c : candidates) cids.push_back(static_cast<int>(cp.size())), cp.push_back(c.predicted);
   const Grid predicted(cp, cids, 32.0);
   std::vector<bool> near_other(candidates.size(), false);
   for (size_t a = 0; a < candidates.size(); ++a) {
-    const Candidate& c = candidates[a];
+    const ForcedCandidate& c = candidates[a];
     const double reach_px = c.length_px + o.isolation_fwhm * c.fwhm_px;
     predicted.Near(c.predicted.x_px, c.predicted.y_px, reach_px, [&](int b) {
       if (b != static_cast<int>(a)) near_other[a] = true;
@@ -271,7 +271,7 @@ std::vector<ForcedDot> MeasureMissingDots(const ScanPixels& scan, const std::vec
     measured[a] = near_other[a] ? Refused(Outcome::kCrowded) : MeasureDot(scan, candidates[a], o);
   });
   for (size_t a = 0; a < candidates.size(); ++a) {
-    const Candidate& c = candidates[a];
+    const ForcedCandidate& c = candidates[a];
     const MeasuredDot& m = measured[a];
     switch (m.outcome) {
       case Outcome::kOutside: ++stats.outside; continue;

@@ -35,7 +35,7 @@ constexpr int kOtherDashes = 2, kDurations = 4;
 constexpr int kMinDurationsCut = 3;
 // A slow star (10 s of motion within this many flow tolerances) is not decoded: readings shifted by 10 s land
 // on its own images. (Its run may merge: the merged explanation below counts it.)
-constexpr double kNotDecodedTolerances = 2.0;
+constexpr double kLoneNotDecodedTolerances = 2.0;
 // A reading showing this many images of another trail of the star shows that trail.
 constexpr int kShownImages = 3;
 // An empty place of a trail counts where an image of that trail (any star's) is tagged within this.
@@ -137,7 +137,7 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   const double speed = std::hypot(v.x_px, v.y_px);
   const ShutterExposure& a_dash = c.per_trail.front().front();  // a leading dash: every dash lasts 20 s
   if (!Compatible(c, dash, a_dash, v, 0.0)) return false;
-  if (10.0 * speed < kNotDecodedTolerances * o.flow_tolerance_px) return false;
+  if (10.0 * speed < kLoneNotDecodedTolerances * o.flow_tolerance_px) return false;
   const double flux_per_s = d.flux_dn / a_dash.duration_s;
   const FlowPath path = PlatePath(c, flow, p);
   const unsigned every_trail = (1u << c.per_trail.size()) - 1u;

@@ -7,16 +7,12 @@
 #include <fmt/format.h>
 
 #include "platemeter/core/scan_orientation.h"
+#include "platemeter/core/why.h"
+#include "platemeter/core/number_text.h"
 
 namespace platemeter {
 namespace {
 
-bool Fail(std::string* why, const std::string& reason) {
-  if (why) *why = reason;
-  return false;
-}
-
-std::string Number(double v) { return fmt::format("{}", v); }
 
 }  // namespace
 
@@ -48,7 +44,7 @@ PlanePoint ComparatorCorrection::Apply(const PlanePoint& px) const {
 
 AppliedCorrection ComparatorCorrection::Record() const {
   return {"comparator",
-          {{"pixel_size_um", Number(pixel_size_um)},
+          {{"pixel_size_um", ShortestText(pixel_size_um)},
            {"orientation_deg", std::to_string(orientation_deg)},
            {"mirrored", mirrored ? "true" : "false"}}};
 }
@@ -71,10 +67,10 @@ PlanePoint ThermalCorrection::Apply(const PlanePoint& mm) const {
 
 AppliedCorrection ThermalCorrection::Record() const {
   return {"thermal",
-          {{"temperature_degC", Number(temperature_degC)},
-           {"calibration_temperature_degC", Number(calibration_temperature_degC)},
-           {"expansion_per_degC", Number(expansion_per_degC)},
-           {"factor", Number(Factor())}}};
+          {{"temperature_degC", ShortestText(temperature_degC)},
+           {"calibration_temperature_degC", ShortestText(calibration_temperature_degC)},
+           {"expansion_per_degC", ShortestText(expansion_per_degC)},
+           {"factor", ShortestText(Factor())}}};
 }
 
 bool ThermalCorrection::Check(std::string* why) const {
@@ -110,12 +106,12 @@ PlanePoint EmulsionDepthCorrection::Apply(const PlanePoint& mm) const {
 
 AppliedCorrection EmulsionDepthCorrection::Record() const {
   return {"emulsion_depth",
-          {{"depth_um", Number(model.depth_um)},
-           {"refractive_index", Number(model.refractive_index)},
-           {"principal_distance_mm", Number(model.principal_distance_mm)},
-           {"centre_x_mm", Number(centre_x_mm)},
-           {"centre_y_mm", Number(centre_y_mm)},
-           {"equivalent_scale", Number(model.EquivalentScale())}}};
+          {{"depth_um", ShortestText(model.depth_um)},
+           {"refractive_index", ShortestText(model.refractive_index)},
+           {"principal_distance_mm", ShortestText(model.principal_distance_mm)},
+           {"centre_x_mm", ShortestText(centre_x_mm)},
+           {"centre_y_mm", ShortestText(centre_y_mm)},
+           {"equivalent_scale", ShortestText(model.EquivalentScale())}}};
 }
 
 bool EmulsionDepthCorrection::Check(std::string* why) const {

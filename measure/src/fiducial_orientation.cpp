@@ -62,7 +62,7 @@ Matrix2x8 InverseByParameters(const ReseauFit& fit, double mx, double my) {
   return a;
 }
 
-int ParameterCount(ReseauFitModel model) { return model == ReseauFitModel::kSimilarity ? 4 : 6; }
+int FiducialParameterCount(ReseauFitModel model) { return model == ReseauFitModel::kSimilarity ? 4 : 6; }
 
 // The variance factor FitReseau applied to the parameter covariance.
 double VarianceFactor(const ReseauFit& fit) { return std::max(1.0, fit.sigma0 * fit.sigma0); }
@@ -170,7 +170,7 @@ FiducialOrientation FitFiducialOrientation(const std::vector<ReseauObservation>&
                                            const FiducialOrientationOptions& options) {
   std::string why;
   if (!options.Check(&why)) throw Error("fiducial orientation", why);
-  const int n = ParameterCount(options.model);
+  const int n = FiducialParameterCount(options.model);
   const int count = static_cast<int>(observations.size());
   if (2 * count <= n) {
     throw Error("fiducial orientation", fmt::format("the {} model needs more than {} measured fiducials, {} usable",

@@ -12,11 +12,11 @@
 
 #include "platemeter/core/error.h"
 #include "platemeter/measure/local_reseau.h"
+#include "platemeter/core/number_text.h"
 
 namespace platemeter {
 namespace {
 
-std::string Number(double v) { return fmt::format("{}", v); }
 
 bool Usable(const MeasuredPoint& p) {
   return p.status == PointStatus::kMeasured && p.x_px && p.y_px && p.sigma_x_px && p.sigma_y_px;
@@ -197,11 +197,11 @@ PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid
   AppliedCorrection fit{"reseau_fit", {{"model", ReseauFitModelName(report.fit.model)}, {"grid", grid.name}}};
   const std::vector<std::string> names = report.fit.ParameterNames();
   for (size_t k = 0; k < names.size(); ++k) {
-    fit.parameters.push_back({names[k], Number(report.fit.parameters[k])});
-    fit.parameters.push_back({"sigma_" + names[k], Number(std::sqrt(report.fit.covariance[9 * k]))});
+    fit.parameters.push_back({names[k], ShortestText(report.fit.parameters[k])});
+    fit.parameters.push_back({"sigma_" + names[k], ShortestText(std::sqrt(report.fit.covariance[9 * k]))});
   }
-  fit.parameters.push_back({"sigma0", Number(report.fit.sigma0)});
-  fit.parameters.push_back({"rms_mm", Number(report.fit.rms_mm)});
+  fit.parameters.push_back({"sigma0", ShortestText(report.fit.sigma0)});
+  fit.parameters.push_back({"rms_mm", ShortestText(report.fit.rms_mm)});
   fit.parameters.push_back({"crosses_used", std::to_string(report.fit.used)});
   fit.parameters.push_back({"crosses_rejected", std::to_string(report.fit.rejected)});
   corrections.push_back(fit);
@@ -209,9 +209,9 @@ PlateCorrectionReport CorrectPlate(MeasurementFile* file, const MasterGrid& grid
     corrections.push_back({"local_reseau",
                            {{"interpolation", "bilinear"},
                             {"applied", report.local_reseau_applied ? "yes" : "no"},
-                            {"reseau_chi2", Number(report.reseau_chi2)},
+                            {"reseau_chi2", ShortestText(report.reseau_chi2)},
                             {"reseau_dof", std::to_string(report.reseau_dof)},
-                            {"p_value", Number(report.reseau_p_value)}}});
+                            {"p_value", ShortestText(report.reseau_p_value)}}});
   }
   if (report.fiducial) corrections.push_back(report.fiducial->Record(options.fiducial_source));
   return report;

@@ -3,6 +3,7 @@
 // (detect/passpoint_detector.h, docs/passpoints.md). Crosses and fiducials
 // found by the earlier stages are masked: they are never passpoints.
 #include <cmath>
+#include <numbers>
 
 #include "detect_stages.h"
 #include "platemeter/core/error.h"
@@ -11,13 +12,12 @@
 namespace platemeter::pipeline {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Two segments through (or from) a point along the directions angle and angle + 90 deg.
 void AddArms(PixelPoint c, double angle_rad, double behind_px, double ahead_px, double radius_px, bool both_handed,
              std::vector<PasspointMask>* mask) {
-  std::vector<double> angles{angle_rad, angle_rad + 0.5 * kPi};
-  if (both_handed) angles.push_back(angle_rad - 0.5 * kPi);  // a corner's second arm: either side of the first
+  std::vector<double> angles{angle_rad, angle_rad + 0.5 * std::numbers::pi};
+  if (both_handed) angles.push_back(angle_rad - 0.5 * std::numbers::pi);  // a corner's second arm: either side of the first
   for (double a : angles) {
     const double ux = std::cos(a), uy = std::sin(a);
     mask->push_back({{c.x_px - behind_px * ux, c.y_px - behind_px * uy},

@@ -108,6 +108,19 @@ MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const UtcI
   return row;
 }
 
+// The plate's star widths (detect/star_width_model.h) as FWHM: the model, and its values over the scan.
+nlohmann::json WidthModelJson(const StarWidthModel& model, double start_fwhm_px) {
+  nlohmann::json j = {{"start_fwhm_px", start_fwhm_px}, {"degree", model.degree}, {"stars_used", model.stars_used}};
+  if (model.degree < 0) return j;
+  j["fwhm_px_at_centre"] = kFwhmPerSigma * model.SigmaAt(model.centre_x_px, model.centre_y_px);
+  j["fwhm_px_min"] = kFwhmPerSigma * model.min_sigma_px;
+  j["fwhm_px_max"] = kFwhmPerSigma * model.max_sigma_px;
+  j["scatter_fwhm_px"] = kFwhmPerSigma * model.scatter_px;
+  j["profile_misfit"] = model.profile_misfit;
+  j["sigma_px_coefficients"] = model.coefficients;  // 1, u, v, u^2, uv, v^2; u, v = -1..1 over the scan
+  return j;
+}
+
 }  // namespace
 
 StageOutput RunStarStage(const DetectContext& context) {
@@ -153,7 +166,8 @@ StageOutput RunStarStage(const DetectContext& context) {
     trail_options.exposed_outline_px = ExposedOutline_px(context);
     trail_options.require_joined = request.trails->require_joined;
   }
-  const std::vector<DetectedStar> stars = DetectStars(context.image, options);
+  StarDetectionStats stats;
+  const std::vector<DetectedStar> stars = DetectStars(context.image, options, &stats);
 
   StageOutput out;
   int measured = 0, rejected = 0;
@@ -162,6 +176,7 @@ StageOutput RunStarStage(const DetectContext& context) {
     rejected += star.point.status == PointStatus::kRejected;
   }
   out.summary = {{"measured", measured}, {"rejected", rejected}};
+  if (!request.trails) out.summary["width_model"] = WidthModelJson(stats.width_model, options.psf_fwhm_px);
   if (!request.trails) {
     for (const DetectedStar& star : stars) out.rows.push_back(StarRow(star));
     out.message = std::to_string(stars.size()) + " images";

@@ -10,7 +10,7 @@
 namespace platemeter::report {
 namespace {
 
-constexpr const char* kStyle = R"(body { font-family: "DejaVu Serif", Georgia, serif; margin: 2em auto; max-width: 820px; color: #111; }
+constexpr const char* kCertificateStyle = R"(body { font-family: "DejaVu Serif", Georgia, serif; margin: 2em auto; max-width: 820px; color: #111; }
 h1 { text-align: center; font-size: 1.6em; letter-spacing: 0.05em; } h2 { font-size: 1.1em; border-bottom: 1px solid #999; }
 .sub { text-align: center; color: #444; } table { border-collapse: collapse; margin: 0.6em 0; }
 th, td { border: 1px solid #bbb; padding: 0.25em 0.7em; } th { background: #eee; }
@@ -45,7 +45,7 @@ std::string DistortionTable(const std::vector<CertificateDistortionRow>& rows) {
 
 std::string FormatCertificateHtml(const Certificate& c) {
   std::string out = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>Report of calibration: " +
-                    Esc(c.camera) + "</title>\n<style>\n" + kStyle + "\n</style>\n</head>\n<body>\n";
+                    Esc(c.camera) + "</title>\n<style>\n" + kCertificateStyle + "\n</style>\n</head>\n<body>\n";
   out += "<h1>REPORT OF CALIBRATION</h1>\n<p class=\"sub\">" + Esc(c.camera) + "</p>\n<p class=\"sub\">" +
          Esc(c.method) + "</p>\n";
   out += "<h2>Calibrated elements</h2>\n" + ElementsTable(c.elements);

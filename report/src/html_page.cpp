@@ -10,7 +10,7 @@
 namespace platemeter::report {
 namespace {
 
-constexpr const char* kStyle = R"(body { font-family: "DejaVu Sans", Arial, sans-serif; margin: 2em auto; max-width: 1300px; color: #222; }
+constexpr const char* kPageStyle = R"(body { font-family: "DejaVu Sans", Arial, sans-serif; margin: 2em auto; max-width: 1300px; color: #222; }
 h1 { font-size: 1.5em; } h2 { border-bottom: 1px solid #ccc; margin-top: 2em; } h3 { font-size: 1.05em; }
 table { border-collapse: collapse; margin: 0.6em 0; font-size: 0.85em; }
 th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; } th { background: #f0f0f0; }
@@ -35,7 +35,7 @@ std::string Slug(const std::string& id) {
 
 std::string FormatHtmlPage(const HtmlPage& page) {
   std::string out = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" +
-                    EscapeMarkup(page.title) + "</title>\n<style>\n" + kStyle + "\n</style>\n</head>\n<body>\n";
+                    EscapeMarkup(page.title) + "</title>\n<style>\n" + kPageStyle + "\n</style>\n</head>\n<body>\n";
   out += "<h1>" + EscapeMarkup(page.title) + "</h1>\n<p>" + EscapeMarkup(page.summary) + "</p>\n";
   if (!page.links.empty()) {
     out += "<p>";

@@ -16,7 +16,7 @@
 namespace platemeter::report {
 namespace {
 
-constexpr unsigned kPalette[] = {0x1f4e9a, 0xc0392b, 0x2ca02c, 0xff7f0e, 0x9467bd, 0x8c564b, 0x17becf, 0x7f7f7f};
+constexpr unsigned kPlatePalette[] = {0x1f4e9a, 0xc0392b, 0x2ca02c, 0xff7f0e, 0x9467bd, 0x8c564b, 0x17becf, 0x7f7f7f};
 
 // A solution whose lens is plotted: a plate's or a combination's.
 struct Solution {
@@ -114,7 +114,7 @@ FigureSection StellarProfileFigures(const StellarReportContext& c) {
     std::string focal_lengths;
     for (const Solution& s : solutions) {
       if (s.who.starts_with("combination") != combinations) continue;
-      const unsigned rgb = kPalette[radial.size() % std::size(kPalette)];
+      const unsigned rgb = kPlatePalette[radial.size() % std::size(kPlatePalette)];
       const StellarProfile p = ComputeStellarProfile(s.lens, MaxDistance(c, s.camera), c.options.profile_samples);
       for (auto* series : {&radial, &transformed, &decentering}) series->push_back({s.who, {}, {}, {}, rgb});
       for (const StellarProfileRow& row : p.rows) {

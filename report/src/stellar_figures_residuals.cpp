@@ -15,7 +15,7 @@ namespace platemeter::report {
 namespace {
 
 // Distinct colours for up to ten trails (then they repeat).
-constexpr unsigned kPalette[] = {0x1f77b4, 0xd62728, 0x2ca02c, 0xff7f0e, 0x9467bd,
+constexpr unsigned kTrailPalette[] = {0x1f77b4, 0xd62728, 0x2ca02c, 0xff7f0e, 0x9467bd,
                                  0x8c564b, 0xe377c2, 0x17becf, 0xbcbd22, 0x7f7f7f};
 constexpr unsigned kSingleImages = 0x404040;
 
@@ -136,7 +136,7 @@ std::map<std::string, unsigned> TrailColours(const StellarReportContext& c) {
     for (const StarImageObservation& image : p.images) colours[image.trail] = 0;
   }
   size_t k = 0;
-  for (auto& [trail, rgb] : colours) rgb = trail.empty() ? kSingleImages : kPalette[k++ % std::size(kPalette)];
+  for (auto& [trail, rgb] : colours) rgb = trail.empty() ? kSingleImages : kTrailPalette[k++ % std::size(kTrailPalette)];
   return colours;
 }
 

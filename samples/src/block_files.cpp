@@ -9,6 +9,7 @@
 
 #include "platemeter/core/version.h"
 #include "platemeter/samples/block_render.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter::sim {
 namespace {
@@ -46,7 +47,6 @@ std::string Triple(const double* v) {
   return "[" + TomlNumber(v[0]) + ", " + TomlNumber(v[1]) + ", " + TomlNumber(v[2]) + "]";
 }
 
-double Deg(double rad) { return rad * 57.29577951308232; }
 
 }  // namespace
 
@@ -101,7 +101,7 @@ std::string BlockBundleJobToml(const BlockSpec& spec, const BlockLayout& layout,
         << TomlString(spec.bundle.measured_dir + "/" + id + "/" + id + ".measurements.csv") << "\n";
     if (a.position_m) out << "position_m = " << Triple(a.position_m->data()) << "\n";
     if (a.angles) {
-      const double angles[3] = {Deg(a.angles->phi_rad), Deg(a.angles->omega_rad), Deg(a.angles->kappa_rad)};
+      const double angles[3] = {a.angles->phi_rad * kDegPerRad, a.angles->omega_rad * kDegPerRad, a.angles->kappa_rad * kDegPerRad};
       out << "angles_deg = " << Triple(angles) << "\n";
     }
   }
@@ -121,7 +121,7 @@ nlohmann::ordered_json FrameJson(const BlockLayout& layout, std::size_t f, const
   j["orbit"] = s.group + 1;
   j["exposure"] = s.index_in_group + 1;
   j["position_m"] = Vector3(s.position_m);
-  j["angles_deg"] = {{"phi", Deg(s.angles.phi_rad)}, {"omega", Deg(s.angles.omega_rad)}, {"kappa", Deg(s.angles.kappa_rad)}};
+  j["angles_deg"] = {{"phi", s.angles.phi_rad * kDegPerRad}, {"omega", s.angles.omega_rad * kDegPerRad}, {"kappa", s.angles.kappa_rad * kDegPerRad}};
   nlohmann::ordered_json t = nlohmann::ordered_json::array();
   for (int r = 0; r < 3; ++r) t.push_back({s.image_from_object(r, 0), s.image_from_object(r, 1), s.image_from_object(r, 2)});
   j["image_from_object"] = t;

@@ -17,7 +17,7 @@ namespace {
 using spec_toml::LineOf;
 using spec_toml::Table;
 
-constexpr double kBig = 1e9;
+constexpr double kNoLimit = 1e9;
 
 toml::table ParseToml(const std::string& text, const std::string& origin) {
   try {
@@ -128,7 +128,7 @@ void ReadPoints(Table& t, BlockSpec* spec) {
   const int frames = static_cast<int>(g.revolutions.size()) * g.exposures_per_orbit;
   t.Integer("min_frames", &g.min_frames_per_point, 0, frames);
   if (g.min_frames_per_point == 1) t.Fail(t.Get("min_frames"), "key 'min_frames' = 1: a point needs two frames (0 = all)");
-  t.Number("relief_m", &g.relief_m, 0, kBig);
+  t.Number("relief_m", &g.relief_m, 0, kNoLimit);
   t.Number("format_margin_mm", &g.format_margin_mm, 0, 1000);
   t.Number("min_separation_mm", &spec->min_separation_mm, 0, 100);
   t.Finish();
@@ -184,7 +184,7 @@ void ReadTables(Table& top, const std::string& origin, BlockSpec* spec) {
   if (const toml::table* table = top.SubTable("control")) {
     Table t(*table, origin, "control");
     t.Integer("count", &spec->control.count, 0, g.passpoints);
-    t.Number("sigma_m", &spec->control.sigma_m, 0, kBig);
+    t.Number("sigma_m", &spec->control.sigma_m, 0, kNoLimit);
     t.Finish();
   }
   if (const toml::table* table = top.SubTable("transfer")) {
@@ -200,9 +200,9 @@ void ReadTables(Table& top, const std::string& origin, BlockSpec* spec) {
   }
   if (const toml::table* table = top.SubTable("approximations")) {
     Table t(*table, origin, "approximations");
-    t.Number("station_sigma_m", &g.approximations.station_sigma_m, 0, kBig);
+    t.Number("station_sigma_m", &g.approximations.station_sigma_m, 0, kNoLimit);
     t.Number("angle_sigma_deg", &g.approximations.angle_sigma_deg, 0, 10);
-    t.Number("point_sigma_m", &g.approximations.point_sigma_m, 0, kBig);
+    t.Number("point_sigma_m", &g.approximations.point_sigma_m, 0, kNoLimit);
     t.Finish();
   }
   if (const toml::table* table = top.SubTable("bundle")) {

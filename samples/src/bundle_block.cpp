@@ -12,6 +12,7 @@
 #include "platemeter/calib/camera_model.h"
 #include "platemeter/calib/distortion_models.h"
 #include "platemeter/core/error.h"
+#include "platemeter/core/why.h"
 
 namespace platemeter::sim {
 
@@ -27,11 +28,6 @@ std::uint64_t DeriveSeed(std::uint64_t seed, Stream stream) {
 }
 
 [[noreturn]] void Throw(const std::string& why) { throw Error("bundle simulator", why); }
-
-bool Fail(std::string* why, const std::string& text) {
-  if (why) *why = text;
-  return false;
-}
 
 double WrapDeg(double deg) {
   double a = std::fmod(deg, 360.0);

@@ -5,17 +5,13 @@
 #include <numbers>
 
 #include "platemeter/core/error.h"
+#include "platemeter/core/why.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter::sim {
 namespace {
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
-constexpr double kArcsecToRad = kDegToRad / 3600.0;
-
-bool Fail(std::string* why, const std::string& reason) {
-  if (why) *why = reason;
-  return false;
-}
 
 PlatePoint Apply(const Matrix2& m, PlatePoint p) {
   return {m.a[0] * p.x_mm + m.a[1] * p.y_mm, m.a[2] * p.x_mm + m.a[3] * p.y_mm};
@@ -251,7 +247,7 @@ bool FilmDeformationStep::Check(std::string* why) const {
 // ---- scanner
 
 Matrix2 ScannerStep::PixelPerMm() const {
-  const double eps = non_orthogonality_arcsec * kArcsecToRad;
+  const double eps = non_orthogonality_arcsec * kRadPerArcsec;
   const double width_mm = pixel_size_um * 1e-3, height_mm = pixel_size_um * pixel_aspect * 1e-3;
   const Matrix2 oblique{{1.0 / width_mm, std::tan(eps) / width_mm, 0.0, -1.0 / (std::cos(eps) * height_mm)}};
   const Matrix2 mirror{{mirrored ? -1.0 : 1.0, 0.0, 0.0, 1.0}};

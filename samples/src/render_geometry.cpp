@@ -1,4 +1,5 @@
 #include "render_geometry.h"
+#include "platemeter/core/angles.h"
 
 #include <algorithm>
 #include <map>
@@ -53,7 +54,6 @@ const GaussLegendreRule& GaussLegendre(int n) {
 }
 
 NormalCdfTable::NormalCdfTable() {
-  constexpr double kInvSqrt2Pi = 0.39894228040143267794;
   for (int i = 0; i < kIntervals; ++i) {
     const double z0 = -kLimit + (i + 0.5) / kPerUnit;
     const double pdf = kInvSqrt2Pi * std::exp(-0.5 * z0 * z0);
@@ -181,7 +181,6 @@ void BlurredDisk(double r, double radius, double sigma, double* value, double* d
 namespace platemeter::sim::render_detail {
 namespace {
 
-constexpr double kInvSqrt2Pi = 0.39894228040143267794;
 inline double Cdf(double z) { return 0.5 * std::erfc(-z * 0.70710678118654752440); }
 inline double Pdf(double z) { return kInvSqrt2Pi * std::exp(-0.5 * z * z); }
 // Psi1 = int Phi, Psi2 = int Psi1.

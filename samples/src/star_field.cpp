@@ -9,17 +9,13 @@
 
 #include "platemeter/calib/rotations.h"
 #include "platemeter/core/error.h"
+#include "platemeter/core/why.h"
 
 namespace platemeter::sim {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180.0;
-
-bool Fail(std::string* why, const std::string& reason) {
-  if (why) *why = reason;
-  return false;
-}
 
 CameraModel ModelOf(const CameraDefinition& camera) {
   if (camera.lens) return CameraModelFromLensCalibration(*camera.lens, "camera " + camera.name);

@@ -11,11 +11,11 @@
 
 #include "platemeter/core/error.h"
 #include "platemeter/measure/measurement_file.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter::sim {
 namespace {
 
-constexpr double kArcsecToRad = M_PI / (180.0 * 3600.0);
 constexpr uint64_t kSelectionSeed = 20261126;  // the selection is part of the plate, not of the noise
 
 }  // namespace
@@ -98,7 +98,7 @@ NoisyStellarPlate Noisy(const StellarTruthPlate& truth, const StellarNoise& nois
     image.sigma_x_mm = sigma_mm;
     image.sigma_y_mm = sigma_mm;
   }
-  const double sigma_rad = noise.catalog_sigma_arcsec * kArcsecToRad;
+  const double sigma_rad = noise.catalog_sigma_arcsec * kRadPerArcsec;
   for (const auto& [id, entry] : truth.catalog) {
     CatalogEntry e = entry;
     e.star.ra_rad += sigma_rad * normal(random) / std::cos(e.star.dec_rad);

@@ -35,7 +35,7 @@ using testing::TempDir;
 std::string Q(const std::string& s) { return "'" + s + "'"; }
 std::string Q(const fs::path& p) { return Q(p.string()); }
 
-std::string ReadText(const fs::path& path) {
+std::string ReadTextOfCli(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream s;
   s << in.rdbuf();
@@ -73,7 +73,7 @@ std::vector<int> GoodIndices(size_t count) {
 std::map<std::string, std::string> FilesIn(const fs::path& folder) {
   std::map<std::string, std::string> files;
   for (const auto& e : fs::directory_iterator(folder)) {
-    if (e.is_regular_file()) files[e.path().filename().string()] = ReadText(e.path());
+    if (e.is_regular_file()) files[e.path().filename().string()] = ReadTextOfCli(e.path());
   }
   return files;
 }
@@ -104,7 +104,7 @@ void ExpectNoPartialFile(const fs::path& out) {
     if (!e.is_regular_file()) continue;
     const std::string name = e.path().filename().string();
     if (IsTemporaryName(name)) continue;
-    const std::string text = ReadText(e.path());
+    const std::string text = ReadTextOfCli(e.path());
     SCOPED_TRACE(e.path().string());
     if (name.size() > 17 && name.substr(name.size() - 17) == ".measurements.csv") {
       const MeasurementFile file = ReadMeasurementFile(e.path().string());
@@ -191,7 +191,7 @@ std::vector<std::string> CsvFields(const std::string& line) {
 
 // A summary CSV without the columns that differ between runs (seconds, finished_utc).
 std::vector<std::vector<std::string>> SummaryWithoutTimes(const fs::path& csv) {
-  std::stringstream in(ReadText(csv));
+  std::stringstream in(ReadTextOfCli(csv));
   std::vector<std::vector<std::string>> rows;
   for (std::string line; std::getline(in, line);) {
     std::vector<std::string> fields = CsvFields(line);
@@ -230,11 +230,11 @@ TEST(BatchCli, FortyScansThreeBadMatchSingleRuns) {
     EXPECT_EQ(line, line_start + record->reason);
     EXPECT_EQ(FilesIn(out / f.names[i]).size(), 1u);  // the record alone
   }
-  const std::string csv = ReadText(out / "batch-summary.csv");
+  const std::string csv = ReadTextOfCli(out / "batch-summary.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 41);
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n') - 1,
             static_cast<long>(ReadAllRecords(out.string()).size()));
-  const std::string html = ReadText(out / "index.html");
+  const std::string html = ReadTextOfCli(out / "index.html");
   EXPECT_NE(html.find("40 scans: 37 ok, 3 failed"), std::string::npos);
 
   // Every good scan measured alone by `platemeter measure`, two at a time.
@@ -291,7 +291,7 @@ TEST(BatchCli, KilledHalfWayRerunDoesEveryScanOnce) {
   int status = 0;
   waitpid(child, &status, 0);
   ASSERT_TRUE(running && WIFSIGNALED(status)) << "the batch ended before it could be killed: "
-                                              << ReadText(dir.path() / "killed.log");
+                                              << ReadTextOfCli(dir.path() / "killed.log");
   const std::map<std::string, FileId> finished = RecordIds(out);
   ASSERT_GE(finished.size(), 4u);
   ASSERT_LT(finished.size(), 12u) << "the kill came too late to test anything";
@@ -319,7 +319,7 @@ TEST(BatchCli, SigintFinishesRunningScansAndExits130) {
   kill(child, SIGINT);
   int status = 0;
   waitpid(child, &status, 0);
-  const std::string log = ReadText(dir.path() / "interrupted.log");
+  const std::string log = ReadTextOfCli(dir.path() / "interrupted.log");
   ASSERT_TRUE(running) << log;
   ASSERT_TRUE(WIFEXITED(status)) << log;
   EXPECT_EQ(WEXITSTATUS(status), 130) << log;
@@ -327,7 +327,7 @@ TEST(BatchCli, SigintFinishesRunningScansAndExits130) {
   const int done = CountRecords(out);
   EXPECT_LT(done, 12) << log;
   // The summary was rewritten with what is done; nothing partial, nothing temporary.
-  const std::string csv = ReadText(out / "batch-summary.csv");
+  const std::string csv = ReadTextOfCli(out / "batch-summary.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), done + 1);
   EXPECT_TRUE(TemporariesUnder(out).empty());
   ExpectNoPartialFile(out);
@@ -351,7 +351,7 @@ TEST(BatchCli, SecondSigintAbandonsRunningScans) {
   kill(child, SIGINT);
   int status = 0;
   waitpid(child, &status, 0);
-  const std::string log = ReadText(dir.path() / "abandoned.log");
+  const std::string log = ReadTextOfCli(dir.path() / "abandoned.log");
   ASSERT_TRUE(running) << log;
   ASSERT_TRUE(WIFEXITED(status)) << log;
   EXPECT_EQ(WEXITSTATUS(status), 130) << log;
@@ -389,15 +389,15 @@ TEST(BatchCli, ThreeShardsWithGnuParallelEqualOneRun) {
   ASSERT_TRUE(WIFEXITED(status));
   // Sorted, plate-07 is at position 7 (shard 2) and plate-19 at 14 (shard 3): shards 2 and 3 fail.
   EXPECT_EQ(WEXITSTATUS(status), 2);
-  EXPECT_NE(ReadText(dir.path() / "shard-1.log").find("5 scans: 5 measured, 0 already current, 0 failed"),
+  EXPECT_NE(ReadTextOfCli(dir.path() / "shard-1.log").find("5 scans: 5 measured, 0 already current, 0 failed"),
             std::string::npos)
-      << ReadText(dir.path() / "shard-1.log");
-  EXPECT_NE(ReadText(dir.path() / "shard-2.log").find("5 scans: 4 measured, 0 already current, 1 failed"),
+      << ReadTextOfCli(dir.path() / "shard-1.log");
+  EXPECT_NE(ReadTextOfCli(dir.path() / "shard-2.log").find("5 scans: 4 measured, 0 already current, 1 failed"),
             std::string::npos)
-      << ReadText(dir.path() / "shard-2.log");
-  EXPECT_NE(ReadText(dir.path() / "shard-3.log").find("5 scans: 4 measured, 0 already current, 1 failed"),
+      << ReadTextOfCli(dir.path() / "shard-2.log");
+  EXPECT_NE(ReadTextOfCli(dir.path() / "shard-3.log").find("5 scans: 4 measured, 0 already current, 1 failed"),
             std::string::npos)
-      << ReadText(dir.path() / "shard-3.log");
+      << ReadTextOfCli(dir.path() / "shard-3.log");
   const CommandResult summary = RunPlatemeter("batch --summary-only -o " + Q(sharded));
   EXPECT_EQ(summary.exit_code, 1);  // some records say failed
   EXPECT_NE(summary.out.find("15 scan records: 13 ok, 2 failed"), std::string::npos) << summary.out;

@@ -32,7 +32,7 @@ void WriteText(const fs::path& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
 }
 
-std::string ReadText(const fs::path& path) {
+std::string ReadTextOfLibrary(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream s;
   s << in.rdbuf();
@@ -252,7 +252,7 @@ TEST(Summary, BuiltFromEveryRecordInOut) {
   EXPECT_EQ(files.scans, 2);
   EXPECT_EQ(files.ok, 1);
   EXPECT_EQ(files.failed, 1);
-  const std::string csv = ReadText(files.csv_path);
+  const std::string csv = ReadTextOfLibrary(files.csv_path);
   std::vector<std::string> lines;
   std::stringstream s(csv);
   for (std::string line; std::getline(s, line);) lines.push_back(line);
@@ -264,7 +264,7 @@ TEST(Summary, BuiltFromEveryRecordInOut) {
   EXPECT_NE(lines[1].find("\"plate-02.tif: only 3 crosses found, \"\"too few\"\"\""), std::string::npos) << lines[1];
   EXPECT_NE(lines[2].find(",118,2,1,121,8,0,0,0,0,0.30000000000000004,1.0000123456789,,12.250,"), std::string::npos)
       << lines[2];
-  const std::string html = ReadText(files.html_path);
+  const std::string html = ReadTextOfLibrary(files.html_path);
   EXPECT_NE(html.find("href=\"plate-07/plate-07.measure.json\""), std::string::npos);
   EXPECT_NE(html.find("href=\"plate-07/plate-07.measurements.csv\""), std::string::npos);
   EXPECT_NE(html.find("only 3 crosses found, &quot;too few&quot;"), std::string::npos);
@@ -284,7 +284,7 @@ TEST(Temporaries, RecognisesEveryWritersTemporaryName) {
   EXPECT_EQ(RemoveTemporaries(dir.path().string()), 1);
   EXPECT_TRUE(fs::exists(dir.path() / "p.measurements.csv"));
   WriteSharedFileAtomically(dir.file("s.csv"), "a,b\n");
-  EXPECT_EQ(ReadText(dir.path() / "s.csv"), "a,b\n");
+  EXPECT_EQ(ReadTextOfLibrary(dir.path() / "s.csv"), "a,b\n");
   EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 2);
 }
 
@@ -297,7 +297,7 @@ struct FakeMeasure {
     if (failing.count(item.input.stem)) throw Error(item.input.path, "too few crosses (3 of 121)");
     const std::string csv = (fs::path(folder) / (item.input.stem + ".measurements.csv")).string();
     const std::string json = (fs::path(folder) / (item.input.stem + ".measure.json")).string();
-    WriteFileAtomically(csv, "id\n" + ReadText(item.input.path) + "\n" + item.options_text);
+    WriteFileAtomically(csv, "id\n" + ReadTextOfLibrary(item.input.path) + "\n" + item.options_text);
     WriteFileAtomically(json, "{}\n");
     ScanWorkResult r;
     r.counts_by_status = {{"measured", 5}};

@@ -15,15 +15,14 @@
 #include "platemeter/calib/star_catalog.h"
 #include "platemeter/core/error.h"
 #include "support/test_support.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter::calib {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-constexpr double kArcsec = kPi / 648000.0;
 
-double Hms(double h, double m, double s) { return (h + m / 60 + s / 3600) * kPi / 12; }
-double Dms(double sign, double d, double m, double s) { return sign * (d + m / 60 + s / 3600) * kPi / 180; }
+double Hms_(double h, double m, double s) { return (h + m / 60 + s / 3600) * std::numbers::pi / 12; }
+double Dms_(double sign, double d, double m, double s) { return sign * (d + m / 60 + s / 3600) * std::numbers::pi / 180; }
 
 struct KnownStar {
   const char* name;
@@ -33,12 +32,12 @@ struct KnownStar {
 
 // Hipparcos J2000 positions and V magnitudes.
 const KnownStar kKnown[] = {
-    {"Vega", Hms(18, 36, 56.336), Dms(+1, 38, 47, 1.28), 0.03, 172167},
-    {"Polaris", Hms(2, 31, 49.095), Dms(+1, 89, 15, 50.79), 1.97, 8890},
-    {"Sirius", Hms(6, 45, 8.917), Dms(-1, 16, 42, 58.02), -1.44, 48915},
-    {"Arcturus", Hms(14, 15, 39.672), Dms(+1, 19, 10, 56.68), -0.05, 124897},
-    {"Rigel", Hms(5, 14, 32.272), Dms(-1, 8, 12, 5.90), 0.18, 34085},
-    {"Deneb", Hms(20, 41, 25.915), Dms(+1, 45, 16, 49.22), 1.25, 197345},
+    {"Vega", Hms_(18, 36, 56.336), Dms_(+1, 38, 47, 1.28), 0.03, 172167},
+    {"Polaris", Hms_(2, 31, 49.095), Dms_(+1, 89, 15, 50.79), 1.97, 8890},
+    {"Sirius", Hms_(6, 45, 8.917), Dms_(-1, 16, 42, 58.02), -1.44, 48915},
+    {"Arcturus", Hms_(14, 15, 39.672), Dms_(+1, 19, 10, 56.68), -0.05, 124897},
+    {"Rigel", Hms_(5, 14, 32.272), Dms_(-1, 8, 12, 5.90), 0.18, 34085},
+    {"Deneb", Hms_(20, 41, 25.915), Dms_(+1, 45, 16, 49.22), 1.25, 197345},
 };
 
 bool CatalogPresent(const std::string& path) { return std::filesystem::is_regular_file(path); }
@@ -55,7 +54,7 @@ const CatalogStar* Nearest(const std::vector<CatalogStar>& stars, double ra, dou
     const double sep = AngularSeparation(s.ra_rad, s.dec_rad, ra, dec);
     if (sep < best_sep) best_sep = sep, best = &s;
   }
-  return best_sep < 60 * kArcsec ? best : nullptr;
+  return best_sep < 60 * kRadPerArcsec ? best : nullptr;
 }
 
 // The whole catalog, loaded once; a load error fails the test that asked.
@@ -77,7 +76,7 @@ TEST_F(StarCatalogTest, BrightStarsAtHipparcosPositions) {
   for (const KnownStar& k : kKnown) {
     const CatalogStar* s = Nearest(*sky_, k.ra_rad, k.dec_rad, 3.0);
     ASSERT_NE(s, nullptr) << k.name << " not found within 60 arcsec";
-    EXPECT_LT(AngularSeparation(s->ra_rad, s->dec_rad, k.ra_rad, k.dec_rad) / kArcsec, 1.0) << k.name;
+    EXPECT_LT(AngularSeparation(s->ra_rad, s->dec_rad, k.ra_rad, k.dec_rad) / kRadPerArcsec, 1.0) << k.name;
     EXPECT_NEAR(s->v_mag, k.v_mag, 0.1) << k.name;
     EXPECT_EQ(s->name, k.name);
   }
@@ -113,9 +112,9 @@ TEST_F(StarCatalogTest, ConeQueryEqualsBruteForce) {
   StarQueryOptions q;
   q.whole_sky = false;
   q.faint_limit_mag = 8.0;
-  q.center_ra_rad = Hms(5, 35, 0);  // Orion
-  q.center_dec_rad = Dms(-1, 5, 0, 0);
-  q.radius_rad = 12.0 * kPi / 180;
+  q.center_ra_rad = Hms_(5, 35, 0);  // Orion
+  q.center_dec_rad = Dms_(-1, 5, 0, 0);
+  q.radius_rad = 12.0 * std::numbers::pi / 180;
   const auto cone = LoadStarCatalog(DefaultStarCatalogPath(), q);
   std::set<int64_t> got, want;
   for (const auto& s : cone) got.insert(s.id);
@@ -142,7 +141,7 @@ TEST_F(StarCatalogTest, BinaryStarDataFileAgrees) {
     ASSERT_NE(s, nullptr) << k.name;
     EXPECT_TRUE(s->id_is_hd) << k.name;
     EXPECT_EQ(s->id, k.hd) << k.name;
-    EXPECT_LT(AngularSeparation(s->ra_rad, s->dec_rad, k.ra_rad, k.dec_rad) / kArcsec, 1.0) << k.name;
+    EXPECT_LT(AngularSeparation(s->ra_rad, s->dec_rad, k.ra_rad, k.dec_rad) / kRadPerArcsec, 1.0) << k.name;
   }
 }
 

@@ -37,7 +37,7 @@ void WriteText(const std::string& path, const std::string& text) {
   out << text;
 }
 
-std::string ReadText(const std::string& path) {
+std::string ReadTextOfInput(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream buffer;
   buffer << in.rdbuf();
@@ -97,7 +97,7 @@ TEST(BundleInputCsv, ObservationsRoundTripGivesTheSameDoubles) {
     EXPECT_EQ(back[i].origin, path + ":" + std::to_string(i + 2));  // the header is line 1
   }
   // Writing what was read gives the same bytes.
-  EXPECT_EQ(FormatObservationsCsv(back), ReadText(path));
+  EXPECT_EQ(FormatObservationsCsv(back), ReadTextOfInput(path));
   EXPECT_FALSE(std::filesystem::exists(dir.file(".obs.partial.csv")));
 }
 
@@ -188,7 +188,7 @@ TEST(BundleInputCsv, GroundPointsRoundTripKeepsFreeFixedAndWeighted) {
   const std::vector<GroundPoint> points = {fixed, weighted, height, free};
   const std::string path = dir.file("ground.csv");
   WriteGroundPointsCsv(path, points);
-  EXPECT_NE(ReadText(path).find("H7,1,2,3,,,1.5\n"), std::string::npos) << ReadText(path);
+  EXPECT_NE(ReadTextOfInput(path).find("H7,1,2,3,,,1.5\n"), std::string::npos) << ReadTextOfInput(path);
   const std::vector<GroundPoint> back = ReadGroundPointsCsv(path);
   ASSERT_EQ(back.size(), points.size());
   for (size_t i = 0; i < back.size(); ++i) {
@@ -200,7 +200,7 @@ TEST(BundleInputCsv, GroundPointsRoundTripKeepsFreeFixedAndWeighted) {
     EXPECT_EQ(back[i].origin, path + ":" + std::to_string(i + 2));
   }
   EXPECT_TRUE(std::signbit(back[3].position_m.x()));
-  EXPECT_EQ(FormatGroundPointsCsv(back), ReadText(path));
+  EXPECT_EQ(FormatGroundPointsCsv(back), ReadTextOfInput(path));
 }
 
 TEST(BundleInputCsv, GroundPointErrorsNameFileLineAndColumn) {
@@ -282,7 +282,7 @@ TEST(BundleInputMeasurements, PasspointsMeasuredInPlateCoordinatesWithFileAndLin
   EXPECT_EQ(o[1].point_id, "P4");
   // The origin's line holds the point's row.
   std::vector<std::string> lines;
-  std::istringstream in(ReadText(path));
+  std::istringstream in(ReadTextOfInput(path));
   for (std::string line; std::getline(in, line);) lines.push_back(line);
   for (const ImageObservation& obs : o) {
     const size_t colon = obs.origin.rfind(':');
@@ -659,7 +659,7 @@ TEST(BundleInputCamera, DefinitionsConvertExactlyOrWithTheFitsResidual) {
 
 // The ```toml block after "### Example" in docs/bundle-job.md.
 std::string DocsExample() {
-  const std::string doc = ReadText(std::string(PLATEMETER_SOURCE_DIR) + "/docs/bundle-job.md");
+  const std::string doc = ReadTextOfInput(std::string(PLATEMETER_SOURCE_DIR) + "/docs/bundle-job.md");
   const size_t section = doc.find("### Example");
   EXPECT_NE(section, std::string::npos);
   const size_t begin = doc.find("```toml\n", section);

@@ -11,7 +11,7 @@
 namespace platemeter {
 namespace {
 
-void Free(BundleInput* input, std::initializer_list<int> indices) {
+void FreeRank(BundleInput* input, std::initializer_list<int> indices) {
   for (int i : indices) input->cameras[0].states[i] = ParameterState::Free();
 }
 
@@ -26,7 +26,7 @@ TEST(BundleRank, Apollo14GeometryNamesThePrincipalPointItCannotRecover) {
   // Seed 000 section 2.3: narrow field (500 mm), every frame at the same kappa,
   // xp and yp free, no control: x_p compensates phi (eq. 12-13), y_p omega.
   sim::SimulatedBlock block = sim::SimulateLunarBlock(sim::Apollo14Section3Options());
-  Free(&block.input, {0, 1, 2, 3, 6, 7});
+  FreeRank(&block.input, {0, 1, 2, 3, 6, 7});
   block.input.ground_points.clear();
   BundleOptions options;
   options.adjustment.max_iterations = 300;
@@ -45,7 +45,7 @@ TEST(BundleRank, Apollo14GeometryNamesThePrincipalPointItCannotRecover) {
 TEST(BundleRank, Apollo14GeometryWithThePrincipalPointFixedAsTheSeedDidIsDetermined) {
   // Seed 000 section 3.2: "x_p and y_p were also constrained to zero".
   sim::SimulatedBlock block = sim::SimulateLunarBlock(sim::Apollo14Section3Options());
-  Free(&block.input, {0, 3, 6, 7});
+  FreeRank(&block.input, {0, 3, 6, 7});
   block.input.ground_points.clear();
   const BundleResult result = RunBundleAdjustment(block.input, BundleOptions{});
   EXPECT_TRUE(result.adjustment.converged);
@@ -57,7 +57,7 @@ TEST(BundleRank, Apollo14GeometryWithThePrincipalPointFixedAsTheSeedDidIsDetermi
 TEST(BundleRank, Section4GeometryDeterminesTheWholeInnerCone) {
   // Seed 000 section 4: convergence and 90 deg kappa increments recover the inner cone.
   sim::SimulatedBlock block = sim::SimulateLunarBlock(sim::Seed000Table9Options(80.0));
-  Free(&block.input, {0, 1, 2, 3, 4, 6, 7});
+  FreeRank(&block.input, {0, 1, 2, 3, 4, 6, 7});
   const BundleResult result = RunBundleAdjustment(block.input, BundleOptions{});
   for (const NullDirection& d : result.adjustment.rank.directions) ADD_FAILURE() << d.words;
   EXPECT_EQ(result.adjustment.rank.datum_defect, 7);
@@ -65,7 +65,7 @@ TEST(BundleRank, Section4GeometryDeterminesTheWholeInnerCone) {
 
 TEST(BundleRank, FixedFrameDatumWithoutADistanceNamesTheScale) {
   sim::SimulatedBlock block = sim::SimulateLunarBlock(sim::Seed000Table9Options(80.0));
-  Free(&block.input, {0, 1, 2});
+  FreeRank(&block.input, {0, 1, 2});
   block.input.frames[4].fixed = true;  // the central exposure, as seed 000 section 3.2
   const BundleResult result = RunBundleAdjustment(block.input, BundleOptions{});
   EXPECT_EQ(result.datum, DatumKind::kFixedFrames);

@@ -20,7 +20,7 @@
 namespace platemeter {
 namespace {
 
-std::string ReadText(const std::string& path) {
+std::string ReadTextOfPrecision(const std::string& path) {
   std::ifstream in(path);
   std::stringstream s;
   s << in.rdbuf();
@@ -28,8 +28,8 @@ std::string ReadText(const std::string& path) {
 }
 
 // The ```toml block of docs/precision-simulation.md.
-std::string DocsExample() {
-  const std::string doc = ReadText(std::string(PLATEMETER_SOURCE_DIR) + "/docs/precision-simulation.md");
+std::string DocsExamplePrecision() {
+  const std::string doc = ReadTextOfPrecision(std::string(PLATEMETER_SOURCE_DIR) + "/docs/precision-simulation.md");
   const size_t begin = doc.find("```toml\n");
   const size_t end = doc.find("```", begin + 8);
   if (begin == std::string::npos || end == std::string::npos) return "";
@@ -96,7 +96,7 @@ TEST(PrecisionPlan, DefaultsAreSeed000Section4) {
 }
 
 TEST(PrecisionPlan, TheDocumentedExampleParses) {
-  const std::string example = DocsExample();
+  const std::string example = DocsExamplePrecision();
   ASSERT_FALSE(example.empty());
   const PrecisionPlan plan = ParsePrecisionPlan(example, "docs/precision-simulation.md");
   EXPECT_EQ(plan.title, "Seed 000 Table 9: 80 mm Hasselblad, 55 x 55 mm");
@@ -372,8 +372,8 @@ TEST(PrecisionSimulation, TextAndJsonReports) {
   testing::TempDir dir;
   const std::vector<std::string> written = WritePrecisionOutputs(dir.file("out"), r);
   ASSERT_EQ(written.size(), 2u);
-  EXPECT_EQ(ReadText(written[0]), FormatPrecisionJson(r));
-  EXPECT_EQ(ReadText(written[1]), text);
+  EXPECT_EQ(ReadTextOfPrecision(written[0]), FormatPrecisionJson(r));
+  EXPECT_EQ(ReadTextOfPrecision(written[1]), text);
 }
 
 }  // namespace

@@ -16,7 +16,6 @@
 namespace platemeter {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
 
 // A full, well-conditioned covariance with the given sigmas and correlations
 // rho_ij = 0.6 * cos(i + 2 j) (symmetrized): every parameter correlated with every other.

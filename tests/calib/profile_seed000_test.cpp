@@ -17,7 +17,7 @@
 namespace platemeter {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+constexpr double kDegSeed = M_PI / 180.0;
 
 // Tables 1 and 3 as camera definitions (Table 6 is the built-in hasselblad-500).
 // OCR reconstructions, all checked against the printed Tables 2, 4 and 8:
@@ -172,7 +172,7 @@ TEST(SeedTable8, PhaseAnglesAndSigmas) {
                                         Lens("hasselblad-500-selfcal-constrained"), -92, 240}};
   for (const Printed& row : table8) {
     const DistortionProfile profile = AsPrinted(row.lens);
-    const double phi0 = profile.phase_angle_rad.value / kDeg, sigma = profile.phase_angle_rad.sigma / kDeg;
+    const double phi0 = profile.phase_angle_rad.value / kDegSeed, sigma = profile.phase_angle_rad.sigma / kDegSeed;
     SCOPED_TRACE(::testing::Message() << row.calibration << ": " << phi0 << " +- " << sigma << " deg");
     EXPECT_NEAR(phi0, row.phi0_deg, 1.0);
     EXPECT_NEAR(sigma, row.sigma_deg, 0.1 * row.sigma_deg);
@@ -189,9 +189,9 @@ TEST(SeedTable8, PhaseAnglesAndSigmas) {
 TEST(SeedTable8, Table3SignAndMagnitudeOfP2) {
   // The reading of Table 3's "2063 *10^-7" that gives Table 8's -92 deg.
   const double p1 = +0.6542e-6;
-  EXPECT_NEAR(DecenteringPhaseAngle_rad(p1, -0.2063e-7) / kDeg, -91.8, 0.05);
-  EXPECT_NEAR(DecenteringPhaseAngle_rad(p1, -0.2063e-6) / kDeg, -107.5, 0.05);
-  EXPECT_NEAR(DecenteringPhaseAngle_rad(p1, +0.2063e-7) / kDeg, -88.2, 0.05);  // prints as -88
+  EXPECT_NEAR(DecenteringPhaseAngle_rad(p1, -0.2063e-7) / kDegSeed, -91.8, 0.05);
+  EXPECT_NEAR(DecenteringPhaseAngle_rad(p1, -0.2063e-6) / kDegSeed, -107.5, 0.05);
+  EXPECT_NEAR(DecenteringPhaseAngle_rad(p1, +0.2063e-7) / kDegSeed, -88.2, 0.05);  // prints as -88
 }
 
 TEST(SeedTables, PublishedSigmaOfK0IsTheRelativeSigmaOfC) {

@@ -16,7 +16,7 @@ namespace {
 
 // Table A.6: "Relative orientation matrix defining a transformation from the
 // Terrain Camera to the Stellar Camera", as printed.
-Eigen::Matrix3d TableA6Matrix() {
+Eigen::Matrix3d TableA6MatrixRotations() {
   Eigen::Matrix3d m;
   m << +0.99999994, +0.00025051, -0.00022525,  //
       -0.00019782, -0.10455878, -0.99451869,   //
@@ -42,7 +42,7 @@ TEST(RadiansFromDms, HandValues) {
 }
 
 TEST(InterlockTableA6, AnglesFromThePrintedMatrix) {
-  const OmegaPhiKappa angles = OmegaPhiKappaFromMatrix(TableA6Matrix());
+  const OmegaPhiKappa angles = OmegaPhiKappaFromMatrix(TableA6MatrixRotations());
   // Printed: OMEGA = -96 deg 00' 06.276", PHI = -0 deg 00' 56.246",
   // KAPPA = +0 deg 00' 40.803". The 8-digit elements carry 1e-8 rad = 0.002".
   EXPECT_NEAR(ArcsecFromRadians(angles.omega_rad - RadiansFromDms(-1, 96, 0, 6.276)), 0.0, 0.01);
@@ -56,7 +56,7 @@ TEST(InterlockTableA6, MatrixFromThePrintedAngles) {
   angles.phi_rad = RadiansFromDms(-1, 0, 0, 56.246);
   angles.kappa_rad = RadiansFromDms(+1, 0, 0, 40.803);
   const Eigen::Matrix3d m = MatrixFromOmegaPhiKappa(angles);
-  const Eigen::Matrix3d printed = TableA6Matrix();
+  const Eigen::Matrix3d printed = TableA6MatrixRotations();
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {
       // 8 printed digits (5e-9) plus the angles' 0.001" (5e-9 rad).

@@ -18,7 +18,7 @@ namespace {
 
 std::string PlanPath(const std::string& name) { return std::string(PLATEMETER_SOURCE_DIR) + "/samples/plans/" + name; }
 
-std::string ReadText(const std::string& path) {
+std::string ReadTextOfSimulate(const std::string& path) {
   std::ifstream in(path);
   std::stringstream s;
   s << in.rdbuf();
@@ -182,8 +182,8 @@ TEST(CalibrateSimulate, CommandPrintsTextOrJsonAndWritesOutputs) {
   EXPECT_EQ(j["kind"], "precision-simulation");
   EXPECT_EQ(j["reference"]["xp_um"], 2.0);
   EXPECT_EQ(j["dof"], 3172.0);
-  EXPECT_EQ(ReadText(dir.file("out/precision.json")), json.out);
-  EXPECT_NE(ReadText(dir.file("out/precision.txt")).find("Distortion profiles"), std::string::npos);
+  EXPECT_EQ(ReadTextOfSimulate(dir.file("out/precision.json")), json.out);
+  EXPECT_NE(ReadTextOfSimulate(dir.file("out/precision.txt")).find("Distortion profiles"), std::string::npos);
 
   EXPECT_THROW(RunCommand({"calibrate", "simulate", plan, "--format", "yaml"}), CLI::ParseError);
   EXPECT_THROW(RunCommand({"calibrate", "simulate", dir.file("missing.toml")}), CLI::ParseError);

@@ -18,7 +18,7 @@ namespace {
 
 using testing::RunPlatemeter;
 
-std::string ReadText(const std::string& path) {
+std::string ReadTextOfCalibrate(const std::string& path) {
   std::ifstream in(path);
   std::stringstream s;
   s << in.rdbuf();
@@ -47,7 +47,7 @@ TEST(CliCalibrate, BundleFromAnObservationsCsvWritesEveryOutput) {
   for (const char* name : {"calibration.json", "report.md", "residuals.csv", "camera-camera.toml"}) {
     EXPECT_TRUE(std::filesystem::exists(out + "/" + name)) << name;
   }
-  const nlohmann::json j = nlohmann::json::parse(ReadText(out + "/calibration.json"));
+  const nlohmann::json j = nlohmann::json::parse(ReadTextOfCalibrate(out + "/calibration.json"));
   EXPECT_EQ(j["datum"]["kind"], "inner-constraints");
   EXPECT_GT(j["degrees_of_freedom"].get<double>(), 3000.0);
   EXPECT_NEAR(j["sigma0"].get<double>(), 1.0, 0.1);
@@ -63,7 +63,7 @@ TEST(CliCalibrate, BundleFromAnObservationsCsvWritesEveryOutput) {
   EXPECT_EQ(j["cameras"][0]["correlation"]["parameters"].size(), 7u);
   EXPECT_EQ(j["frames"].size(), 9u);
   // One residual row per observation, plus the header.
-  const std::string residuals = ReadText(out + "/residuals.csv");
+  const std::string residuals = ReadTextOfCalibrate(out + "/residuals.csv");
   EXPECT_EQ(std::count(residuals.begin(), residuals.end(), '\n'), long(block.input.observations.size()) + 1);
   // The calibrated camera loads as a definition.
   const auto show = RunPlatemeter("--definitions '" + out + "/camera-camera.toml' cameras show camera");
@@ -121,7 +121,7 @@ TEST(CliCalibrate, PointsSeenOnceAndThinFramesAreLeftOutWithWarnings) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.err.find("warning: point LONE"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("warning: frame THIN"), std::string::npos) << run.err;
-  const nlohmann::json j = nlohmann::json::parse(ReadText(out + "/calibration.json"));
+  const nlohmann::json j = nlohmann::json::parse(ReadTextOfCalibrate(out + "/calibration.json"));
   EXPECT_EQ(j["warnings"].size(), 2u);
   EXPECT_EQ(j["frames"].size(), 9u);
 }
@@ -182,7 +182,7 @@ robust_loss_scale = 3.0
   const auto run = RunPlatemeter("calibrate bundle --quiet '" + dir.file("job.toml") + "' -o '" + out + "'");
   if (getenv("PLATEMETER_KEEP")) std::filesystem::copy(out, "/tmp/pm/job_out", std::filesystem::copy_options::recursive | std::filesystem::copy_options::overwrite_existing);
   ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
-  const nlohmann::json j = nlohmann::json::parse(ReadText(out + "/calibration.json"));
+  const nlohmann::json j = nlohmann::json::parse(ReadTextOfCalibrate(out + "/calibration.json"));
   EXPECT_EQ(j["datum"]["kind"], "control") << j["datum"];
   EXPECT_EQ(j["rank"]["datum_defect"], 0);
   EXPECT_EQ(j["rejected_observations"], 1);

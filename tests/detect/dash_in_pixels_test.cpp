@@ -18,7 +18,7 @@ constexpr double kBackground_dn = 30000.0, kNoise_dn = 25.0, kFwhm_px = 2.0;
 constexpr double kDashFlux_dn = 60000.0, kDashLength_px = 7.0;
 constexpr double kAngle_rad = 0.3;
 
-struct Image {
+struct ImageBuffer {
   long width_px = 64, height_px = 64;
   std::vector<float> values_dn = std::vector<float>(64 * 64, static_cast<float>(kBackground_dn));
 
@@ -90,7 +90,7 @@ PixelPoint Along(double along_px, double across_px = 0.0) {
 }
 
 TEST(DashInPixels, ADashAloneShowsInItsThirds) {
-  Image image;
+  ImageBuffer image;
   image.Add(32.2, 31.9, kDashLength_px, kAngle_rad, kDashFlux_dn);  // 0.2 px off the place: the flow's tolerance
   image.AddNoise(1);
   const DashInPixels seen = MeasureDashInPixels(image.Scan(), Place(), {});
@@ -109,7 +109,7 @@ TEST(DashInPixels, ADashAloneShowsInItsThirds) {
 TEST(DashInPixels, ADashMergedWithANeighbourIntoOneDetectionShows) {
   // The dash and a point image of half its flux 1.5 px beside its forward end, detected as one segment whose
   // centre, length and flux are no dash's: its centre lies on the sweep, so its light is what is asked about.
-  Image image;
+  ImageBuffer image;
   image.Add(32.0, 32.0, kDashLength_px, kAngle_rad, kDashFlux_dn);
   const PixelPoint n = Along(3.0, 1.5);
   image.Add(n.x_px, n.y_px, 0.0, 0.0, 0.5 * kDashFlux_dn);
@@ -125,7 +125,7 @@ TEST(DashInPixels, ADashMergedWithANeighbourIntoOneDetectionShows) {
 
 TEST(DashInPixels, AForeignImageBesideAnEmptyPlaceLeavesItEmpty) {
   // The place before a run is empty; another star's bright point image lies 3 px beside it, detected.
-  Image image;
+  ImageBuffer image;
   const PixelPoint f = Along(0.5, 3.0);
   image.Add(f.x_px, f.y_px, 0.0, 0.0, 2.0 * kDashFlux_dn);
   image.AddNoise(3);
@@ -140,7 +140,7 @@ TEST(DashInPixels, AForeignImageBesideAnEmptyPlaceLeavesItEmpty) {
 
 TEST(DashInPixels, AForeignPointImageOnThePlaceIsNoDash) {
   // A point image of a dash's flux right on the place: its light fills the middle third, not the ends.
-  Image image;
+  ImageBuffer image;
   image.Add(32.0, 32.0, 0.0, 0.0, kDashFlux_dn);
   image.AddNoise(4);
   const DashInPixels seen = MeasureDashInPixels(image.Scan(), Place(), {Detection(32.0, 32.0, 0.0, 0.0, kDashFlux_dn)});
@@ -153,7 +153,7 @@ TEST(DashInPixels, AForeignPointImageOnThePlaceIsNoDash) {
 
 TEST(DashInPixels, AnotherDashHalfADashAlongTheTrackIsNoDash) {
   // Another star's dash (the same direction and length: the flow's) half a dash along the track.
-  Image image;
+  ImageBuffer image;
   const PixelPoint f = Along(0.5 * kDashLength_px);
   image.Add(f.x_px, f.y_px, kDashLength_px, kAngle_rad, kDashFlux_dn);
   image.AddNoise(5);
@@ -168,7 +168,7 @@ TEST(DashInPixels, ADetectionThatMayHoldTheDashLeavesItUndecided) {
   // The dash merged with a point image of its flux 3 px beside it into one broad detection (FWHM 3.5 px),
   // centred 2.2 px off the track: off the sweep, so it is modelled, its flux free, and its model may take
   // the dash's light. The place is not called empty.
-  Image image;
+  ImageBuffer image;
   image.Add(32.0, 32.0, kDashLength_px, kAngle_rad, kDashFlux_dn);
   const PixelPoint n = Along(0.0, 3.0);
   image.Add(n.x_px, n.y_px, 0.0, 0.0, kDashFlux_dn);
@@ -183,7 +183,7 @@ TEST(DashInPixels, ADetectionThatMayHoldTheDashLeavesItUndecided) {
 }
 
 TEST(DashInPixels, NothingIsMeasuredOffTheScanOrBesideAClippedPixel) {
-  Image image;
+  ImageBuffer image;
   image.Add(32.0, 32.0, kDashLength_px, kAngle_rad, kDashFlux_dn);
   image.AddNoise(7);
   DashPlace near_edge = Place();

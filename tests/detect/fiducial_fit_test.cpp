@@ -10,6 +10,7 @@
 #include <cmath>
 #include <random>
 #include <vector>
+#include <numbers>
 
 #include "platemeter/detect/fiducial_fit.h"
 #include "platemeter/samples/render_crb.h"
@@ -18,7 +19,6 @@
 namespace platemeter {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 struct Case {
   sim::MarkShapeKind shape;
@@ -51,7 +51,7 @@ sim::SceneMark MakeMark(const Case& c, PixelPoint centre) {
   m.kind = sim::MarkKind::kFiducial;
   m.shape = c.shape;
   m.centre_px = centre;
-  const double s = 1.0 / c.pixel_um, a = c.rotation_deg * kPi / 180.0;
+  const double s = 1.0 / c.pixel_um, a = c.rotation_deg * std::numbers::pi / 180.0;
   const double mx = c.mirrored ? -1.0 : 1.0;
   // px = s * flip_y * R(a) * mirror_x * um.
   m.px_from_um[0] = s * std::cos(a) * mx;
@@ -60,7 +60,7 @@ sim::SceneMark MakeMark(const Case& c, PixelPoint centre) {
   m.px_from_um[3] = -s * std::cos(a);
   m.line_width_um = c.line_width_um;
   m.size_um = c.size_um;
-  m.corner_angle_rad = c.corner_angle_deg * kPi / 180.0;
+  m.corner_angle_rad = c.corner_angle_deg * std::numbers::pi / 180.0;
   m.amplitude_dn = c.amplitude_dn;
   return m;
 }
@@ -76,7 +76,7 @@ MarkFitStart StartFor(const Case& c, const sim::SceneMark& m, double dx, double 
   start.blur_sigma_px = 0.8;
   if (start.type == MarkType::kCorner) {
     const double* a = m.px_from_um;
-    const double a1 = m.corner_angle_rad - 0.25 * kPi, a2 = m.corner_angle_rad + 0.25 * kPi;
+    const double a1 = m.corner_angle_rad - 0.25 * std::numbers::pi, a2 = m.corner_angle_rad + 0.25 * std::numbers::pi;
     const double e1[2] = {a[0] * std::cos(a1) + a[1] * std::sin(a1), a[2] * std::cos(a1) + a[3] * std::sin(a1)};
     const double e2[2] = {a[0] * std::cos(a2) + a[1] * std::sin(a2), a[2] * std::cos(a2) + a[3] * std::sin(a2)};
     start.rotation_rad = std::atan2(e1[1], e1[0]) + (c.hold_rotation ? 0.0 : 0.01);

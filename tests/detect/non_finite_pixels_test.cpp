@@ -30,7 +30,7 @@ namespace {
 
 constexpr double kPixelUm = 40.0;  // the CI size: 3200 x 3200 px
 
-std::string Spec() {
+std::string SpecNonFinite() {
   return "name = \"plate\"\ncamera = \"sn004-terrain\"\nseed = 5\n"
          "[output]\npixel_size_um = 40.0\nmargin_mm = 1.0\n"
          "[film]\naffine_ppm = [40.0, 5.0, -3.0, -25.0]\n"
@@ -41,18 +41,18 @@ std::string Spec() {
 }
 
 // The plate rendered once, its 16-bit DN scaled to [0, 1] as a float scanner writes them.
-struct FloatPlate {
+struct FloatPlateOfPixels {
   sim::SimulatedPlate plate;
   long width_px = 0, height_px = 0;
   std::vector<float> values;  // row-major, [0, 1]
 };
 
-const FloatPlate& Plate() {
-  static const FloatPlate plate = [] {
+const FloatPlateOfPixels& PlateOfPixels() {
+  static const FloatPlateOfPixels plate = [] {
     testing::TempDir dir;
     const DefinitionRegistry registry;
-    FloatPlate p;
-    p.plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(Spec(), "test spec"), registry);
+    FloatPlateOfPixels p;
+    p.plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(SpecNonFinite(), "test spec"), registry);
     const Image image = Image::Open(sim::WriteSimulatedPlate(p.plate, dir.path().string()).image_path);
     p.width_px = image.info().width_px;
     p.height_px = image.info().height_px;
@@ -65,8 +65,8 @@ const FloatPlate& Plate() {
 
 std::string WriteFloat(const std::string& path, const std::vector<float>& values) {
   ImageWriterOptions options;
-  options.width_px = Plate().width_px;
-  options.height_px = Plate().height_px;
+  options.width_px = PlateOfPixels().width_px;
+  options.height_px = PlateOfPixels().height_px;
   options.sample_type = SampleType::kFloat32;
   options.pixel_size_um = kPixelUm;
   options.compression = "none";  // quick to write; compression plays no part here
@@ -75,7 +75,7 @@ std::string WriteFloat(const std::string& path, const std::vector<float>& values
 }
 
 PixelPoint TruthOf(const std::string& id, PointKind kind) {
-  for (const MeasuredPoint& t : Plate().plate.truth)
+  for (const MeasuredPoint& t : PlateOfPixels().plate.truth)
     if (t.kind == kind && t.id == id && t.x_px) return {*t.x_px, *t.y_px};
   ADD_FAILURE() << "no truth for " << id;
   return {};
@@ -84,7 +84,7 @@ PixelPoint TruthOf(const std::string& id, PointKind kind) {
 // 100 distinct bad pixels: 40 on the arms of the first 40 crosses (3 to 8 px from the centre), one on the
 // first fiducial's mark, the rest scattered; the values cycle through NaN, +Inf, -Inf, 3e38, -3e38, 1e20.
 std::vector<float> WithBadPixels(std::set<std::pair<long, long>>* bad) {
-  const FloatPlate& p = Plate();
+  const FloatPlateOfPixels& p = PlateOfPixels();
   std::vector<float> values = p.values;
   const float kinds[] = {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
                          -std::numeric_limits<float>::infinity(), 3e38f, -3e38f, 1e20f};
@@ -135,7 +135,7 @@ TEST(NonFinitePixels, ReadAsMaskedAndCountedExactly) {
 TEST(NonFinitePixels, CostNoCrossAndMoveNoCentreBeyondItsSigma) {
   testing::TempDir dir;
   std::set<std::pair<long, long>> bad;
-  const ReseauDetection clean = Detect(Image::Open(WriteFloat(dir.file("clean.tif"), Plate().values)));
+  const ReseauDetection clean = Detect(Image::Open(WriteFloat(dir.file("clean.tif"), PlateOfPixels().values)));
   const ReseauDetection masked = Detect(Image::Open(WriteFloat(dir.file("masked.tif"), WithBadPixels(&bad))));
   ASSERT_TRUE(clean.found) << clean.summary;
   ASSERT_TRUE(masked.found) << masked.summary;
@@ -171,12 +171,12 @@ TEST(NonFinitePixels, CostNoCrossAndMoveNoCentreBeyondItsSigma) {
 
 TEST(NonFinitePixels, AMostlyMaskedCrossIsMissingTheOthersMeasured) {
   testing::TempDir dir;
-  std::vector<float> values = Plate().values;
+  std::vector<float> values = PlateOfPixels().values;
   const PixelPoint centre = TruthOf("X6Y6", PointKind::kReseau);
   // A 16 x 16 px hole over the cross (15 px arms tip to tip): most of its fit region.
   for (long y = std::lround(centre.y_px) - 8; y < std::lround(centre.y_px) + 8; ++y)
     for (long x = std::lround(centre.x_px) - 8; x < std::lround(centre.x_px) + 8; ++x)
-      values[static_cast<size_t>(y * Plate().width_px + x)] = std::numeric_limits<float>::quiet_NaN();
+      values[static_cast<size_t>(y * PlateOfPixels().width_px + x)] = std::numeric_limits<float>::quiet_NaN();
   const ReseauDetection d = Detect(Image::Open(WriteFloat(dir.file("hole.tif"), values)));
   ASSERT_TRUE(d.found) << d.summary;
   EXPECT_EQ(d.masked_px, 16 * 16);
@@ -196,7 +196,7 @@ TEST(NonFinitePixels, AMostlyMaskedCrossIsMissingTheOthersMeasured) {
 TEST(NonFinitePixels, FiducialWithAMaskedPixelIsMeasured) {
   testing::TempDir dir;
   std::set<std::pair<long, long>> bad;
-  const Image clean_image = Image::Open(WriteFloat(dir.file("clean.tif"), Plate().values));
+  const Image clean_image = Image::Open(WriteFloat(dir.file("clean.tif"), PlateOfPixels().values));
   const Image masked_image = Image::Open(WriteFloat(dir.file("masked.tif"), WithBadPixels(&bad)));
   const DefinitionRegistry registry;
   const CameraDefinition& camera = registry.Camera("sn004-terrain");

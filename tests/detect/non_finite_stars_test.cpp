@@ -43,7 +43,7 @@ std::vector<float> Scene() {
   return v;
 }
 
-StarDetectorOptions Options() {
+StarDetectorOptions OptionsNonFinite() {
   StarDetectorOptions o;
   o.dark = false;
   o.psf_fwhm_px = 2.3548 * kSigmaPx;
@@ -85,8 +85,8 @@ TEST(NonFiniteStars, MaskedPixelsAreLeftOutAndAMostlyMaskedStarIsRejected) {
   }
   ASSERT_EQ(CountMaskedPixels(masked.data(), masked.size()), 10u + 91u + 50u);
 
-  const std::vector<DetectedStar> a = DetectStarsInBuffer(clean.data(), kSize, kSize, 65535.0, Options());
-  const std::vector<DetectedStar> b = DetectStarsInBuffer(masked.data(), kSize, kSize, 65535.0, Options());
+  const std::vector<DetectedStar> a = DetectStarsInBuffer(clean.data(), kSize, kSize, 65535.0, OptionsNonFinite());
+  const std::vector<DetectedStar> b = DetectStarsInBuffer(masked.data(), kSize, kSize, 65535.0, OptionsNonFinite());
   int measured = 0;
   for (const DetectedStar& s : b) {
     EXPECT_FALSE(std::isnan(s.point.position_px.x_px) || std::isnan(s.flux_dn));

@@ -34,7 +34,7 @@ std::string BundledSpec() {
 }
 
 // The scan and its truth passpoints (with their Cramer-Rao bounds, from the truth file).
-struct Rendered {
+struct RenderedPasspoints {
   std::string image_path;
   double pixel_size_um = 0.0;
   std::vector<MeasuredPoint> truth;        // kind passpoint
@@ -42,11 +42,11 @@ struct Rendered {
   std::vector<std::pair<PixelPoint, double>> dust;  // centre, radius in px
 };
 
-Rendered Render(const std::string& toml, const TempDir& dir) {
+RenderedPasspoints RenderPasspoints(const std::string& toml, const TempDir& dir) {
   const DefinitionRegistry registry;
   const sim::SimulationSpec spec = sim::ParseSimulationSpec(toml, "test spec");
   sim::SimulatedPlate plate = sim::BuildSimulatedPlate(spec, registry);
-  Rendered r;
+  RenderedPasspoints r;
   r.pixel_size_um = plate.pixel_size_um;
   for (int k : plate.dust) {
     const sim::SceneMark& m = plate.scene.marks[static_cast<size_t>(k)];
@@ -113,7 +113,7 @@ Comparison Compare(const PasspointDetection& found, const std::vector<MeasuredPo
 }
 
 // The marks no dust disk reaches (mark_radius_px + 4 px of it) and how many of them were measured.
-std::pair<int, int> CleanMarks(const Rendered& r, const Comparison& c, double mark_radius_px) {
+std::pair<int, int> CleanMarks(const RenderedPasspoints& r, const Comparison& c, double mark_radius_px) {
   int clean = 0, found = 0;
   for (const MeasuredPoint& t : r.truth) {
     bool touched = false;
@@ -131,7 +131,7 @@ class BundledPlate : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new TempDir;
-    plate_ = new Rendered(Render(BundledSpec(), *dir_));
+    plate_ = new RenderedPasspoints(RenderPasspoints(BundledSpec(), *dir_));
   }
   static void TearDownTestSuite() {
     delete plate_;
@@ -139,13 +139,13 @@ class BundledPlate : public ::testing::Test {
     plate_ = nullptr, dir_ = nullptr;
   }
   static TempDir* dir_;
-  static Rendered* plate_;
+  static RenderedPasspoints* plate_;
 };
 TempDir* BundledPlate::dir_ = nullptr;
-Rendered* BundledPlate::plate_ = nullptr;
+RenderedPasspoints* BundledPlate::plate_ = nullptr;
 
 TEST_F(BundledPlate, AutomaticModeFindsEveryRingAndNothingElse) {
-  const Rendered& r = *plate_;
+  const RenderedPasspoints& r = *plate_;
   ASSERT_EQ(r.truth.size(), 41u);
   const Image image = Image::Open(r.image_path);
   PasspointDetectorOptions options = RingOptions(r.pixel_size_um);
@@ -188,7 +188,7 @@ TEST_F(BundledPlate, AutomaticModeFindsEveryRingAndNothingElse) {
 // List mode: the user's ids; an entry with no mark nearby, or off the scan, is
 // missing; a masked mark is no passpoint; two marks in the window are ambiguous.
 TEST_F(BundledPlate, ListModeKeepsTheUsersIdsAndNeverFabricates) {
-  const Rendered& r = *plate_;
+  const RenderedPasspoints& r = *plate_;
   const Image image = Image::Open(r.image_path);
   PasspointDetectorOptions options = RingOptions(r.pixel_size_um);  // search radius: 2 diameters = 25 px
   // Operator clicks: up to 10 px off, every other passpoint, ids of the user's own.
@@ -273,7 +273,7 @@ TEST(PasspointDetector, BrightRingsAmongDustOfTheSameSize) {
   std::string spec = BundledSpec();
   spec.replace(spec.find("count = 40"), 10, "count = 24");  // fewer fits: a shorter test
   spec.replace(spec.find("polarity = \"dark\"\ncontrast_dn = 60.0\ncount"), 17, "polarity = \"bright\"");
-  const Rendered r = Render(spec +
+  const RenderedPasspoints r = RenderPasspoints(spec +
                                 "\n[defects]\ndust_count = 40\ndust_diameter_min_um = 150.0\ndust_diameter_max_um = 350.0\n"
                                 "dust_contrast_dn = 60.0\nscratch_count = 4\nscratch_width_um = 40.0\n"
                                 "dust_polarity = \"bright\"\nscratch_contrast_dn = 40.0\nscratch_polarity = \"bright\"\n",
@@ -305,7 +305,7 @@ TEST(PasspointDetector, DotsAmongSmallerDust) {
   spec.replace(spec.find("count = 40"), 10, "count = 24");
   spec += "\n[defects]\ndust_count = 40\ndust_diameter_min_um = 40.0\ndust_diameter_max_um = 120.0\ndust_contrast_dn = 60.0\n";
   TempDir dir;
-  const Rendered r = Render(spec, dir);
+  const RenderedPasspoints r = RenderPasspoints(spec, dir);
   ASSERT_EQ(r.truth.size(), 25u);
   const Image image = Image::Open(r.image_path);
   PasspointDetectorOptions options;

@@ -18,20 +18,20 @@
 namespace platemeter {
 namespace {
 
-struct Rendered {
+struct RenderedReseau {
   sim::SimulatedPlate plate;
   std::string image_path;
 };
 
-Rendered Render(const std::string& toml, const testing::TempDir& dir) {
+RenderedReseau RenderReseau(const std::string& toml, const testing::TempDir& dir) {
   const DefinitionRegistry registry;
-  Rendered r;
+  RenderedReseau r;
   r.plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(toml, "test spec"), registry);
   r.image_path = sim::WriteSimulatedPlate(r.plate, dir.path().string()).image_path;
   return r;
 }
 
-std::string Spec(const std::string& camera, const std::string& scanner, const std::string& extra) {
+std::string SpecReseau(const std::string& camera, const std::string& scanner, const std::string& extra) {
   return "name = \"plate\"\ncamera = \"" + camera + "\"\nseed = 5\n" +
          "[output]\npixel_size_um = 25.0\nmargin_mm = 1.0\n"
          "[film]\naffine_ppm = [40.0, 5.0, -3.0, -25.0]\n"
@@ -44,7 +44,7 @@ std::string Spec(const std::string& camera, const std::string& scanner, const st
 
 TEST(ReseauDetector, RightIdsInARotatedMirroredDegradedScan) {
   testing::TempDir dir;
-  const Rendered r = Render(Spec("sn004-terrain", "orientation_deg = 90\nmirrored = true\n",
+  const RenderedReseau r = RenderReseau(SpecReseau("sn004-terrain", "orientation_deg = 90\nmirrored = true\n",
                                  "[marks.reseau]\npolarity = \"bright\"\ncontrast_dn = 12000.0\n"
                                  "[defects]\ndust_count = 30\ndamaged_crosses = [\"X4Y4\"]\n"
                                  "[[defects.false_mark]]\nnear = \"X4Y4\"\noffset_um = [3000.0, 0.0]\n"),
@@ -82,7 +82,7 @@ TEST(ReseauDetector, RightIdsInARotatedMirroredDegradedScan) {
 
 TEST(ReseauDetector, RegularGridOrientationIsAmbiguousUnlessGiven) {
   testing::TempDir dir;
-  const Rendered r = Render(Spec("orbigon", "orientation_deg = 180\n", ""), dir);
+  const RenderedReseau r = RenderReseau(SpecReseau("orbigon", "orientation_deg = 180\n", ""), dir);
   const DefinitionRegistry registry;
   const Image image = Image::Open(r.image_path);
   ReseauDetectorOptions options;
@@ -112,7 +112,7 @@ TEST(ReseauDetector, RegularGridOrientationIsAmbiguousUnlessGiven) {
 
 TEST(ReseauDetector, NoGridInAnEmptyScan) {
   testing::TempDir dir;
-  const Rendered r = Render("name = \"empty\"\ncamera = \"sn004-terrain\"\n[output]\npixel_size_um = 25.0\n"
+  const RenderedReseau r = RenderReseau("name = \"empty\"\ncamera = \"sn004-terrain\"\n[output]\npixel_size_um = 25.0\n"
                             "[marks.reseau]\ncontrast_dn = 1.0\n[noise]\nsensor_sigma_dn = 50.0\n",
                             dir);
   const DefinitionRegistry registry;

@@ -22,15 +22,15 @@ namespace {
 
 using testing::TempDir;
 
-struct Rendered {
+struct RenderedStars {
   sim::SimulatedPlate plate;
   std::string image_path;
   std::vector<sim::MarkCramerRao> crb;  // per scene mark
 };
 
-Rendered Render(const std::string& toml, const TempDir& dir) {
+RenderedStars RenderStars(const std::string& toml, const TempDir& dir) {
   const DefinitionRegistry registry;
-  Rendered r;
+  RenderedStars r;
   r.plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(toml, "star test spec"), registry);
   r.crb = sim::CramerRaoBounds(r.plate.scene);
   r.image_path = sim::WriteSimulatedPlate(r.plate, dir.path().string()).image_path;
@@ -119,7 +119,7 @@ class StarCentroidTest : public ::testing::TestWithParam<bool> {};
 TEST_P(StarCentroidTest, IsolatedBrightStarsReachTheCramerRaoBound) {
   const TempDir dir;
   // Magnitudes 6.5..8: peaks 25000..6300 DN, SNR about 1700..400.
-  const Rendered r = Render(Spec("count = 300\nmagnitude_min = 6.5\nmagnitude_max = 8.0"), dir);
+  const RenderedStars r = RenderStars(Spec("count = 300\nmagnitude_min = 6.5\nmagnitude_max = 8.0"), dir);
   const Image image = Image::Open(r.image_path);
   StarDetectorOptions options = Options();
   options.windowed_centroid = GetParam();
@@ -180,7 +180,7 @@ TEST(StarDetectorTest, ClosePairsBothFoundWithoutDrift) {
                         "\ny_mm = " + std::to_string(y_mm - dy) + "\nmagnitude = " + (k % 2 ? "7.5" : "7.0") + "\n";
       ++k;
     }
-  const Rendered r = Render(Spec(explicit_stars), dir);
+  const RenderedStars r = RenderStars(Spec(explicit_stars), dir);
   const std::vector<DetectedStar> stars = DetectStars(Image::Open(r.image_path), Options());
   int pairs = 0, both = 0;
   double drift_sum = 0, drift2 = 0, crb2 = 0;
@@ -232,7 +232,7 @@ TEST(StarDetectorTest, ClosePairsBothFoundWithoutDrift) {
 // from their wings, flagged saturated, within 0.1 px.
 TEST(StarDetectorTest, SaturatedStarsMeasuredFromTheWingsAndFlagged) {
   const TempDir dir;
-  const Rendered r = Render(Spec("count = 40\nmagnitude_min = 2.5\nmagnitude_max = 3.5"), dir);
+  const RenderedStars r = RenderStars(Spec("count = 40\nmagnitude_min = 2.5\nmagnitude_max = 3.5"), dir);
   const std::vector<DetectedStar> stars = DetectStars(Image::Open(r.image_path), Options());
   int checked = 0;
   for (const MeasuredPoint& t : r.plate.truth) {
@@ -255,7 +255,7 @@ TEST(StarDetectorTest, SaturatedStarsMeasuredFromTheWingsAndFlagged) {
 // measured star (with and without the crosses' positions as a mask).
 TEST(StarDetectorTest, ReseauCrossesDustAndScratchesAreNotStars) {
   const TempDir dir;
-  const Rendered r = Render(Spec("", R"(
+  const RenderedStars r = RenderStars(Spec("", R"(
 [defects]
 dust_count = 30
 dust_diameter_min_um = 120.0
@@ -303,7 +303,7 @@ scratch_width_um = 20.0
 // each once, as one pass over the whole image in memory.
 TEST(StarDetectorTest, BandsReportEveryStarOnceAsTheWholeImageDoes) {
   const TempDir dir;
-  const Rendered r = Render(Spec("count = 300\nmagnitude_min = 6.0\nmagnitude_max = 10.0"), dir);
+  const RenderedStars r = RenderStars(Spec("count = 300\nmagnitude_min = 6.0\nmagnitude_max = 10.0"), dir);
   const Image image = Image::Open(r.image_path);
   const ImageWindow all = image.ReadWindow(image.Bounds());
   StarDetectorOptions o = Options();
@@ -614,7 +614,10 @@ TEST(StarDetectorTest, StarsBetweenACrossArmsAreMeasured) {
     } else {
       StarDetectorOptions arm_pixels_in = arms;
       arm_pixels_in.mask_arm_half_width_px = 0.0;
-      EXPECT_LT(score(stars, crossed, arm_pixels_in).pull_px, -0.02) << "the arms' pixels push the fits away";
+      // The arms' pixels in the fits push them away, or leave profiles no star has (refused as shape).
+      const Score in = score(stars, crossed, arm_pixels_in);
+      EXPECT_TRUE(in.pull_px < -0.02 || in.measured < n / 2) << "pull " << in.pull_px << ", " << in.measured << " of " << n;
+      std::printf("arms' pixels in the fits: %d of %d measured, pull %+.4f px\n", in.measured, n, in.pull_px);
     }
   }
 }

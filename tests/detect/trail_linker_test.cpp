@@ -36,7 +36,7 @@ using testing::OrbigonTrailSpec;
 using testing::SecondsAfter0530;
 
 // The plate of the tests below: catalog stars to V = 2.5 (experiments: TRAIL_MAG) at 12.5 um.
-std::string Spec(double magnitude = 2.5, double pixel_size_um = 12.5) {
+std::string SpecTrails(double magnitude = 2.5, double pixel_size_um = 12.5) {
   return OrbigonTrailSpec("trails", magnitude, magnitude, 2500.0, pixel_size_um, 20.0);
 }
 
@@ -155,7 +155,7 @@ const BandRun& Band() {
     // (more, fainter stars), TRAIL_PIXEL_UM another pixel size.
     const double mag = std::getenv("TRAIL_MAG") ? std::atof(std::getenv("TRAIL_MAG")) : 3.5;
     const double pixel_um = std::getenv("TRAIL_PIXEL_UM") ? std::atof(std::getenv("TRAIL_PIXEL_UM")) : 12.5;
-    std::string spec = Spec(mag, pixel_um);
+    std::string spec = SpecTrails(mag, pixel_um);
     if (const char* path = std::getenv("TRAIL_SPEC")) {  // experiments: another spec (its pixel size: TRAIL_PIXEL_UM)
       std::ifstream in(path);
       spec.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
@@ -325,7 +325,7 @@ TEST(TrailLinker, TheSiderealFitExposesDisplacedDots) {
 TEST(TrailLinker, ADecodedTrailsUndetectedDotsAreMeasuredAtItsTrack) {
   if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
     GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
-  static const BandRun b = RunBand(Spec(3.5), 12.5, 1400, 10.0);
+  static const BandRun b = RunBand(SpecTrails(3.5), 12.5, 1400, 10.0);
   const ScanPixels scan = BandPixels(b);
   TrailOptions to = b.options;
   ForcedDotStats stats;
@@ -586,7 +586,7 @@ TEST(TrailLinker, DecodesTheTrueImagesOfAWholePlate) {
   if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
     GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
   const sim::SimulatedPlate plate =
-      sim::BuildSimulatedPlate(sim::ParseSimulationSpec(Spec(), "trails.toml"), DefinitionRegistry());
+      sim::BuildSimulatedPlate(sim::ParseSimulationSpec(SpecTrails(), "trails.toml"), DefinitionRegistry());
   std::vector<DetectedStar> found;
   std::vector<const MeasuredPoint*> source;  // truth row of each detection (nullptr: stray)
   // Decodable trails: all 25 dots and all N + 4 dashes on the format (the others are cut by its edge).

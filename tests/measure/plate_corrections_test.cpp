@@ -22,7 +22,7 @@
 namespace platemeter {
 namespace {
 
-constexpr double kSigmaPx = 0.05;  // px; 2 um at 40 um pixels
+constexpr double kSigmaPxPlate = 0.05;  // px; 2 um at 40 um pixels
 
 // Orbigon plate, 40 um pixels, seed 001's temperature and emulsion depth,
 // film deformation (affine + a wave), an oblique scanner.
@@ -65,7 +65,7 @@ struct Measured {
 Measured MeasureWithNoise(const std::string& spec_text, unsigned seed, const std::string& orientation = "0") {
   Measured m{sim::BuildSimulatedPlate(sim::ParseSimulationSpec(spec_text, "t.toml"), DefinitionRegistry()), {}};
   std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, kSigmaPx);
+  std::normal_distribution<double> noise(0.0, kSigmaPxPlate);
   m.file.header.plate_id = "t";
   m.file.header.camera = "orbigon";
   m.file.header.pixel_size_um = m.plate.pixel_size_um;
@@ -76,8 +76,8 @@ Measured MeasureWithNoise(const std::string& spec_text, unsigned seed, const std
     p.kind = t.kind;
     p.x_px = *t.x_px + noise(rng);
     p.y_px = *t.y_px + noise(rng);
-    p.sigma_x_px = kSigmaPx;
-    p.sigma_y_px = kSigmaPx;
+    p.sigma_x_px = kSigmaPxPlate;
+    p.sigma_y_px = kSigmaPxPlate;
     m.file.points.push_back(p);
   }
   return m;

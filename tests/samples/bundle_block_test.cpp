@@ -13,13 +13,13 @@
 #include "platemeter/calib/camera_model.h"
 #include "platemeter/calib/distortion_models.h"
 #include <Eigen/LU>
+#include <numbers>
 
 #include "platemeter/core/error.h"
 
 namespace platemeter::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Largest |residual| (mm) of seed 000 eq. (1) over the noise-free observations,
 // through calib's CollinearityResidualT<BrownAffine> with the true values.
@@ -120,7 +120,7 @@ TEST(BundleBlockLunar, Section4GeometryFacts) {
   // The middle orbit passes over G: there seed 000's kappa itself steps by 90 deg.
   for (int j = 1; j < 3; ++j) {
     const double step = truth.stations[3 + j].angles.kappa_rad - truth.stations[3 + j - 1].angles.kappa_rad;
-    EXPECT_NEAR(std::remainder(step - kPi / 2, 2 * kPi), 0.0, 1e-9);
+    EXPECT_NEAR(std::remainder(step - std::numbers::pi / 2, 2 * std::numbers::pi), 0.0, 1e-9);
   }
   // Consecutive orbits 8.5 km apart across the track (Y) at the centre frames.
   EXPECT_NEAR((truth.stations[4].position_m - truth.stations[1].position_m).y() * 1737.4 / 1846.0, 8.5e3, 10.0);
@@ -196,7 +196,7 @@ TEST(BundleBlockLunar, Apollo14Section3SameKappaNarrowField) {
   EXPECT_EQ(truth.points.size(), 170u);
   EXPECT_NEAR(truth.camera.c_mm, 509.80, 0.01);
   // 8.9 deg across the diagonal of 55 x 55 mm ("8 deg" in the seed).
-  EXPECT_NEAR(2.0 * std::atan(std::hypot(27.5, 27.5) / truth.camera.c_mm) * 180.0 / kPi, 8.8, 0.2);
+  EXPECT_NEAR(2.0 * std::atan(std::hypot(27.5, 27.5) / truth.camera.c_mm) * 180.0 / std::numbers::pi, 8.8, 0.2);
   for (int orbit = 0; orbit < 3; ++orbit) {
     EXPECT_NEAR(ConvergenceAngleDeg(truth.stations[3 * orbit], truth.stations[3 * orbit + 2]), 80.0, 1.0);
   }
@@ -301,7 +301,7 @@ TEST(BundleBlockPlanar, OpenCvViewsFollowTheDocumentedPixelMapping) {
   // Varied poses: tilts spread over 10..45 deg from the target normal.
   double min_tilt = 90.0, max_tilt = 0.0;
   for (const StationTruth& s : truth.stations) {
-    const double tilt = std::acos(-s.OpticalAxis().z()) * 180.0 / kPi;
+    const double tilt = std::acos(-s.OpticalAxis().z()) * 180.0 / std::numbers::pi;
     min_tilt = std::min(min_tilt, tilt), max_tilt = std::max(max_tilt, tilt);
   }
   EXPECT_GE(min_tilt, 10.0 - 1e-9);
@@ -350,7 +350,7 @@ TEST(BundleBlockAerial, SmallBlockFacts) {
   for (const auto& [id, n] : per_point) EXPECT_GE(n, 2) << id;
   EXPECT_EQ(per_point.size(), 1500u);
   for (const StationTruth& s : truth.stations) {
-    EXPECT_NEAR(std::acos(-s.OpticalAxis().z()) * 180.0 / kPi, 15.0, 1e-9) << s.id;
+    EXPECT_NEAR(std::acos(-s.OpticalAxis().z()) * 180.0 / std::numbers::pi, 15.0, 1e-9) << s.id;
     EXPECT_NEAR(std::remainder(RollAboutAxisDeg(s.image_from_object, s.velocity_direction) - 90.0 * s.index_in_group,
                                360.0),
                 0.0, 1e-9);

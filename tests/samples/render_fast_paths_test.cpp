@@ -18,14 +18,14 @@
 namespace platemeter::sim {
 namespace {
 
-double Phi(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
+double PhiNormal(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
 
 TEST(RenderFastPaths, TabulatedNormalCdfMatchesErfc) {
   const render_detail::NormalCdfTable& table = render_detail::TheNormalCdfTable();
   double worst = 0.0;
   for (long k = -2000000; k <= 2000000; ++k) {
     const double z = k * 1e-5 * 1.00000017;  // off the table's grid
-    worst = std::max(worst, std::abs(render_detail::FastNormalCdf(table, z) - Phi(z)));
+    worst = std::max(worst, std::abs(render_detail::FastNormalCdf(table, z) - PhiNormal(z)));
   }
   EXPECT_LT(worst, 1e-15);
   EXPECT_EQ(render_detail::FastNormalCdf(table, 8.5), 1.0);
@@ -42,7 +42,7 @@ TEST(RenderFastPaths, TabulatedNormalCdfMatchesErfc) {
       const double* c = table.coefficients[i];
       double value = c[7];
       for (int k = 6; k >= 0; --k) value = c[k] + t * value;
-      worst_far = std::max(worst_far, std::abs(value - Phi(centre + t)));
+      worst_far = std::max(worst_far, std::abs(value - PhiNormal(centre + t)));
     }
   }
   EXPECT_LT(worst_far, 1e-15);
@@ -81,7 +81,7 @@ double SweptDensity(const double c[3], const double half[2], double x, double y)
   // int over t in [-L/2, L/2] of exp(-(a t^2 - 2 b t + q) / 2) dt / L.
   const double sa = std::sqrt(a), t0 = b / a;
   return norm * std::exp(-0.5 * (q - b * b / a)) * std::sqrt(2.0 * M_PI / a) / length *
-         (Phi(sa * (0.5 * length - t0)) - Phi(sa * (-0.5 * length - t0)));
+         (PhiNormal(sa * (0.5 * length - t0)) - PhiNormal(sa * (-0.5 * length - t0)));
 }
 
 // Pixel mean of the mark (DN) by a fine Gauss-Legendre rule (cells of 0.7 sigma, 12 nodes).

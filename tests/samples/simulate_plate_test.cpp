@@ -206,7 +206,7 @@ quantize = false
   EXPECT_EQ(checked, 4);
 }
 
-std::string ReadText(const std::string& path) {
+std::string ReadTextOfPlate(const std::string& path) {
   std::ifstream in(path);
   std::stringstream s;
   s << in.rdbuf();
@@ -283,7 +283,7 @@ missing_crosses = ["X2Y3"]
   EXPECT_EQ(stars, 4);
 
   // The chain file: the parameters used, and it reproduces the truth pixels.
-  const auto chain_json = nlohmann::json::parse(ReadText(out + "/tiny.chain.json"));
+  const auto chain_json = nlohmann::json::parse(ReadTextOfPlate(out + "/tiny.chain.json"));
   EXPECT_EQ(chain_json["chain"]["scanner"]["orientation_deg"], 270);
   EXPECT_EQ(chain_json["chain"]["emulsion_depth"]["depth_um"], 21.0);
   const GeometryChain chain = GeometryChain::FromJson(chain_json["chain"].dump(), "tiny.chain.json");
@@ -323,7 +323,7 @@ TEST(SimulateCommand, FullSizeAndSeedSwitches) {
   const testing::CommandResult run =
       testing::RunPlatemeter("simulate '" + spec + "' -o '" + dir.file("out") + "' --full-size --seed 9");
   ASSERT_EQ(run.exit_code, 0) << run.err;
-  const auto chain_json = nlohmann::json::parse(ReadText(dir.file("out") + "/tiny.chain.json"));
+  const auto chain_json = nlohmann::json::parse(ReadTextOfPlate(dir.file("out") + "/tiny.chain.json"));
   EXPECT_EQ(chain_json["image"]["pixel_size_um"], 50.0);
   EXPECT_EQ(chain_json["seed"], 9);
   EXPECT_EQ(chain_json["full_size"], true);

@@ -12,20 +12,18 @@
 
 #include "platemeter/grids/registry.h"
 #include "platemeter/samples/star_field.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter::sim {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-constexpr double kDeg = kPi / 180.0;
-constexpr double kArcsec = kPi / 648000.0;
 
 // Vega, Hipparcos (J2000, mu_alpha* with cos dec).
 calib::CatalogStar Vega() {
   calib::CatalogStar s;
   s.id = 91262;  // HIP number; only an id here
-  s.ra_rad = (18.0 + 36.0 / 60 + 56.336 / 3600) * 15.0 * kDeg;
-  s.dec_rad = (38.0 + 47.0 / 60 + 1.28 / 3600) * kDeg;
+  s.ra_rad = (18.0 + 36.0 / 60 + 56.336 / 3600) * 15.0 * kRadPerDeg;
+  s.dec_rad = (38.0 + 47.0 / 60 + 1.28 / 3600) * kRadPerDeg;
   s.pm_ra_mas_yr = 200.94;
   s.pm_dec_mas_yr = 286.23;
   s.parallax_mas = 128.93;
@@ -45,7 +43,7 @@ CameraDefinition PinholeCamera(double c_mm) {
 // Beltsville, MD (approximate), a May night.
 StarFieldOptions Beltsville(const std::string& utc) {
   StarFieldOptions o;
-  o.place.site = {39.03 * kDeg, -76.93 * kDeg, 50.0};
+  o.place.site = {39.03 * kRadPerDeg, -76.93 * kRadPerDeg, 50.0};
   o.place.pressure_hpa = 1005.0;
   o.place.temperature_degC = 12.0;
   o.place.relative_humidity = 0.6;
@@ -59,8 +57,8 @@ StarFieldOptions Beltsville(const std::string& utc) {
 // Independent observed direction (ENU) with eraAtco13.
 Eigen::Vector3d IndependentEnu(const calib::CatalogStar& s, const StarFieldOptions& o, double utc1, double utc2) {
   double aob, zob, hob, dob, rob, eo;
-  const double pr = s.pm_ra_mas_yr / 1000.0 * kArcsec / std::cos(s.dec_rad);  // dRA/dt, rad/yr
-  const double pd = s.pm_dec_mas_yr / 1000.0 * kArcsec;
+  const double pr = s.pm_ra_mas_yr / 1000.0 * kRadPerArcsec / std::cos(s.dec_rad);  // dRA/dt, rad/yr
+  const double pd = s.pm_dec_mas_yr / 1000.0 * kRadPerArcsec;
   const int status = eraAtco13(s.ra_rad, s.dec_rad, pr, pd, s.parallax_mas / 1000.0, 0.0, utc1, utc2, 0.0,
                                o.place.site.longitude_rad, o.place.site.latitude_rad, o.place.site.height_m, 0.0, 0.0,
                                o.place.pressure_hpa, o.place.temperature_degC, o.place.relative_humidity,
@@ -95,7 +93,7 @@ TEST(StarFieldPlace, VegaMatchesEraAtco13AndAGnomonicProjection) {
     const double x_mm = c_mm * enu.x() / enu.z(), y_mm = c_mm * enu.y() / enu.z();
     const Eigen::Vector3d expected(x_mm, y_mm, c_mm);
     const Eigen::Vector3d got(image.mid_mm.x_mm, image.mid_mm.y_mm, c_mm);
-    EXPECT_LT(AngleBetween(expected, got) / kArcsec, 0.05)
+    EXPECT_LT(AngleBetween(expected, got) / kRadPerArcsec, 0.05)
         << "plate (" << image.mid_mm.x_mm << ", " << image.mid_mm.y_mm << ") mm against (" << x_mm << ", " << y_mm << ")";
     EXPECT_EQ(image.star_id, "KS91262");
     EXPECT_EQ(image.kind, StarImageKind::kStar);
@@ -115,7 +113,7 @@ TEST(StarFieldPlace, RefractionLiftsTheStarTowardTheZenith) {
   const StarImage without = ComputeStarImages(o, {Vega()}, lens, 114, 114).images.at(0);
   const double z_with = std::atan(std::hypot(with.mid_mm.x_mm, with.mid_mm.y_mm) / 80.0);
   const double z_without = std::atan(std::hypot(without.mid_mm.x_mm, without.mid_mm.y_mm) / 80.0);
-  const double refraction_arcsec = (z_without - z_with) / kArcsec;
+  const double refraction_arcsec = (z_without - z_with) / kRadPerArcsec;
   const double classical = 16.27 * 1005.0 / (273.15 + 12.0) * std::tan(z_without);  // Bennett/Saemundsson-type constant
   EXPECT_NEAR(refraction_arcsec, classical, 0.05 * classical);
 }
@@ -123,14 +121,14 @@ TEST(StarFieldPlace, RefractionLiftsTheStarTowardTheZenith) {
 TEST(StarFieldPlace, PointingConvention) {
   // Zenith, roll 30 deg: the plate x axis is east turned 30 deg toward north.
   const Eigen::Matrix3d zenith = CameraFromEnu(0.0, 90.0, 30.0);
-  EXPECT_NEAR(zenith(0, 0), std::cos(30 * kDeg), 1e-15);
-  EXPECT_NEAR(zenith(0, 1), std::sin(30 * kDeg), 1e-15);
+  EXPECT_NEAR(zenith(0, 0), std::cos(30 * kRadPerDeg), 1e-15);
+  EXPECT_NEAR(zenith(0, 1), std::sin(30 * kRadPerDeg), 1e-15);
   EXPECT_NEAR(zenith(2, 2), 1.0, 1e-15);
   // Tilted: the third row is the axis (azimuth 120, altitude 50) and a star on
   // the axis lands on the principal point.
   const Eigen::Matrix3d m = CameraFromEnu(120.0, 50.0, -15.0);
-  const Eigen::Vector3d axis(std::sin(120 * kDeg) * std::cos(50 * kDeg), std::cos(120 * kDeg) * std::cos(50 * kDeg),
-                             std::sin(50 * kDeg));
+  const Eigen::Vector3d axis(std::sin(120 * kRadPerDeg) * std::cos(50 * kRadPerDeg), std::cos(120 * kRadPerDeg) * std::cos(50 * kRadPerDeg),
+                             std::sin(50 * kRadPerDeg));
   EXPECT_NEAR((m.row(2).transpose() - axis).norm(), 0.0, 1e-14);
   EXPECT_NEAR((m * m.transpose() - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-14);
   EXPECT_NEAR(m.determinant(), 1.0, 1e-14);
@@ -150,7 +148,7 @@ TEST(StarFieldPlace, OrbigonLensIsAppliedInSeed001sLeftHandedFrame) {
   // (v -> -v), mirrored back (y -> -y), is the plate position.
   const double c_mm = 80.17103, xp_mm = -0.02050, yp_mm = -0.00004;
   const double slama[8] = {1.0636 - xp_mm, -1.1637 - yp_mm, 3.6494e-1, -1.1011e+2, 9.5244e+3, 7.8152e-4, 5.0665e-2,
-                           -271.2 * kDeg};
+                           -271.2 * kRadPerDeg};
   const DefinitionRegistry registry;
   const CameraDefinition* orbigon = registry.FindCamera("orbigon");
   ASSERT_NE(orbigon, nullptr);

@@ -17,16 +17,15 @@
 #include "platemeter/samples/spec.h"
 #include "platemeter/samples/star_field.h"
 #include "support/test_support.h"
+#include "platemeter/core/angles.h"
 
 namespace platemeter::sim {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-constexpr double kDeg = kPi / 180.0;
 
 TEST(StarFieldPlate, BelowTheHorizonOrOutsideTheFormatGivesNoImage) {
   StarFieldOptions o;
-  o.place.site = {39.03 * kDeg, -76.93 * kDeg, 50.0};
+  o.place.site = {39.03 * kRadPerDeg, -76.93 * kRadPerDeg, 50.0};
   o.start_utc = calib::ParseUtcIso8601("1972-05-12T06:00:00Z");
   o.duty_cycle = false;
   o.single_exposure_s = 10.0;
@@ -38,8 +37,8 @@ TEST(StarFieldPlate, BelowTheHorizonOrOutsideTheFormatGivesNoImage) {
   auto star = [&](int id, double hour_angle_deg, double dec_deg) {
     calib::CatalogStar s;
     s.id = id;
-    s.ra_rad = eraAnp(lst - hour_angle_deg * kDeg);
-    s.dec_rad = dec_deg * kDeg;
+    s.ra_rad = eraAnp(lst - hour_angle_deg * kRadPerDeg);
+    s.dec_rad = dec_deg * kRadPerDeg;
     s.v_mag = 3.0;
     return s;
   };
@@ -63,7 +62,7 @@ TEST(StarFieldPlate, BelowTheHorizonOrOutsideTheFormatGivesNoImage) {
   // ~150" cos(dec) on the sky, i.e. ~0.045 mm at c = 80 mm.
   const StarImage& image = r.images[0];
   const double length_mm = std::hypot(image.close_mm.x_mm - image.open_mm.x_mm, image.close_mm.y_mm - image.open_mm.y_mm);
-  const double expected_mm = 80.0 * 10.0 * 15.0411 / 206264.806 * std::cos(40.0 * kDeg);
+  const double expected_mm = 80.0 * 10.0 * 15.0411 / 206264.806 * std::cos(40.0 * kRadPerDeg);
   EXPECT_NEAR(length_mm, expected_mm, 0.02 * expected_mm);
 }
 

@@ -45,6 +45,9 @@ struct PhiOmegaKappaT {
   double kappa_rad = 0.0;
 };
 
+// Below this cos(phi) the first and third rotations are not separable (gimbal lock).
+inline constexpr double kGimbalLockCos = 1e-9;
+
 Eigen::Matrix3d MatrixFromOmegaPhiKappa(const OmegaPhiKappa& angles);
 // Angles of the nearest rotation to `m` (the printed matrices are orthogonal only
 // to their 8 digits): phi in [-pi/2, pi/2], omega and kappa in (-pi, pi].

@@ -23,6 +23,7 @@
 #include "platemeter/core/image.h"
 #include "platemeter/core/pixel.h"
 #include "platemeter/detect/point.h"
+#include "platemeter/detect/star_width_model.h"
 
 namespace platemeter {
 
@@ -41,7 +42,9 @@ std::string StarFlagNames(unsigned flags);
 
 struct StarDetectorOptions {
   bool dark = true;                       // stars darker than the background (negative plate)
-  double psf_fwhm_px = 2.5;               // px; expected FWHM of a point image (matched filter, start of the fit)
+  // px; a point image's FWHM to start from (matched filter, start of the fits). Not a limit: every image's
+  // width is fitted, and the shape test compares it with the plate's width model (star_width_model.h).
+  double psf_fwhm_px = 2.5;
   int mesh_px = 64;                       // px; side of a background mesh cell
   double clip_sigma = 3.0;                // sigma-clipping limit of the mesh statistics
   double threshold_sigma = 4.0;           // detection threshold in sigma of the matched-filtered noise
@@ -52,8 +55,10 @@ struct StarDetectorOptions {
   // Masked pixels (core/image.h: no value in the scan) are background to the matched filter and left out
   // of the fits; an image whose fit window has more than this share of them is rejected (masked_pixels).
   double max_masked_fraction = 0.25;
-  double max_fwhm_ratio = 1.8;            // fitted FWHM / psf_fwhm_px above this: defect (dust, blob)
-  double min_fwhm_ratio = 0.4;            // below this: defect (hot pixel, grain)
+  // Fitted FWHM / the width model's at the image's place (trail mode: / psf_fwhm_px) above this: defect
+  // (dust, blob); below min_fwhm_ratio: defect (hot pixel, grain).
+  double max_fwhm_ratio = 1.8;
+  double min_fwhm_ratio = 0.4;
   double max_ellipticity = 0.3;           // 1 - b/a above this: elongated
   double max_component_fwhm = 12.0;       // component bounding box longer than this many PSF FWHM: defect (line, cross)
   double pair_chi2_gain = 30.0;           // chi^2 decrease needed to accept a second star in a component
@@ -93,6 +98,9 @@ struct DetectedStar {
   double background_dn = 0.0;   // DN; local background (mesh + fitted offset)
   double fwhm_px = 0.0;         // px; fitted FWHM
   double ellipticity = 0.0;     // 1 - b/a from Gaussian-weighted second moments
+  // The profile's departure from the fitted Gaussian, unblended point images: excess residual RMS x
+  // sigma / flux (0: within the noise); a dust disk gives ~0.05, a Gaussian star 0.
+  double profile_misfit = 0.0;
   double snr = 0.0;             // flux / sigma_flux
   double length_px = 0.0;       // px; trail mode: fitted sweep length of a segment image (0: fitted as a point)
   double sigma_length_px = 0.0; // px; formal sigma of length_px
@@ -107,6 +115,7 @@ struct StarDetectionStats {
   double noise_sigma_dn = 0.0;  // median per-cell background sigma (the image's sigma)
   long components = 0;          // connected components above the threshold
   long defects = 0;             // components or fits rejected as defects
+  StarWidthModel width_model;   // the plate's star widths (not fitted in trail mode: degree -1)
   long bands = 0;
 };
 

@@ -41,6 +41,7 @@
 
 #include "platemeter/calib/bundle_input.h"
 #include "platemeter/calib/rotations.h"
+#include "platemeter/core/why.h"  // Fail, used by the generators
 
 namespace platemeter::sim {
 
@@ -332,7 +333,6 @@ namespace bundle_internal {
 enum class Stream : std::uint64_t { kNoise = 1, kPlacement = 2, kApproximations = 3, kPoses = 4 };
 std::uint64_t DeriveSeed(std::uint64_t seed, Stream stream);
 [[noreturn]] void Throw(const std::string& why);  // platemeter::Error("bundle simulator", why)
-bool Fail(std::string* why, const std::string& text);
 bool CheckSigmas(double sigma_um, double weight_sigma_um, std::string* why);
 inline double Rad(double deg) { return deg * 0.017453292519943295; }
 inline double Deg(double rad) { return rad * 57.29577951308232; }

@@ -22,8 +22,10 @@ struct WidthSample {
 
 int Terms(int degree) { return degree == 2 ? 6 : degree == 1 ? 3 : 1; }
 
-Eigen::VectorXd Basis(int degree, double u, double v) {
-  Eigen::VectorXd b(Terms(degree));
+// At most 6 terms, on the stack (SigmaAt runs once per image).
+using BasisVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, 6, 1>;
+BasisVector Basis(int degree, double u, double v) {
+  BasisVector b(Terms(degree));
   b(0) = 1.0;
   if (degree >= 1) b(1) = u, b(2) = v;
   if (degree >= 2) b(3) = u * u, b(4) = u * v, b(5) = v * v;
@@ -45,7 +47,7 @@ bool IsModelStar(const DetectedStar& s, const StarWidthModel& reference) {
 double StarWidthModel::SigmaAt(double x_px, double y_px) const {
   if (coefficients.empty()) return min_sigma_px;
   const double u = (x_px - centre_x_px) / half_width_px, v = (y_px - centre_y_px) / half_height_px;
-  const Eigen::VectorXd b = Basis(degree, u, v);
+  const BasisVector b = Basis(degree, u, v);
   const double sigma = b.dot(Eigen::Map<const Eigen::VectorXd>(coefficients.data(), b.size()));
   return std::clamp(sigma, min_sigma_px, max_sigma_px);
 }

@@ -299,6 +299,115 @@ void MeasureSegment(const SweepMoments& m, const std::vector<FitPixel>& pixels, 
   result->push_back(d);
 }
 
+// The pair test of a component whose single fit is too wide or leaves a chi^2 excess: two starts (a
+// split along the major axis by the excess second moment; the single star plus one at the largest
+// residual), the better kept when chi^2 drops by pair_chi2_gain and both are star images of the width
+// expected here. True when *fit became the pair.
+bool TryPair(const std::vector<FitPixel>& pixels, const cv::Mat& labels, int label, long y0_abs, const FittedGaussian& start,
+             double image_sigma, double noise, double min_sigma, const StarDetectorOptions& o, GaussianFitResult* fit) {
+  // Two stars along the component's major axis, split by the excess second moment.
+  const double cx = fit->stars[0].x_px, cy = fit->stars[0].y_px;
+  double sxx = 0, syy = 0, sxy = 0, w = 0;
+  for (const FitPixel& p : pixels) {
+    const double dx = p.x_px - cx, dy = p.y_px - cy;
+    if (p.value_dn <= 0 || dx * dx + dy * dy > 36 * image_sigma * image_sigma) continue;
+    w += p.value_dn, sxx += p.value_dn * dx * dx, syy += p.value_dn * dy * dy, sxy += p.value_dn * dx * dy;
+  }
+  if (w > 0) {
+    Eigen::Matrix2d m;
+    m << sxx / w, sxy / w, sxy / w, syy / w;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(m);
+    const Eigen::Vector2d axis = eig.eigenvectors().col(1);
+    const double h = std::sqrt(std::max(eig.eigenvalues()(1) - eig.eigenvalues()(0), 0.5));
+    FittedGaussian a = start, c = start;
+    a.x_px = cx + h * axis(0), a.y_px = cy + h * axis(1);
+    c.x_px = cx - h * axis(0), c.y_px = cy - h * axis(1);
+    a.flux_dn = c.flux_dn = 0.5 * fit->stars[0].flux_dn;
+    GaussianFitResult pair = star_internal::FitGaussians(pixels, {a, c}, noise, min_sigma);
+    // Second start: the single fit plus a star at the largest residual of the
+    // component (wider pairs, where the single fit sits on the brighter star).
+    {
+      const GaussianFitResult& f = *fit;
+      const FittedGaussian& g = f.stars[0];
+      double worst = -1e30;
+      FittedGaussian second = start;
+      for (const FitPixel& p : pixels) {
+        if (labels.at<int>(int(p.y_px - y0_abs), int(p.x_px)) != label) continue;
+        const double model = f.offset_dn + g.flux_dn * std::exp(-0.5 * (std::pow(p.x_px - g.x_px, 2) + std::pow(p.y_px - g.y_px, 2)) /
+                                                                (g.sigma_px * g.sigma_px)) / (2 * M_PI * g.sigma_px * g.sigma_px);
+        if (p.value_dn - model > worst) worst = p.value_dn - model, second.x_px = p.x_px, second.y_px = p.y_px;
+      }
+      second.flux_dn = std::max(worst, 0.0) * 2 * M_PI * image_sigma * image_sigma;
+      FittedGaussian first = g;
+      first.sigma_px = image_sigma;
+      GaussianFitResult alt = star_internal::FitGaussians(pixels, {first, second}, noise, min_sigma);
+      if (alt.stars.size() == 2 && (pair.stars.size() != 2 || alt.chi2 < pair.chi2)) pair = std::move(alt);
+    }
+    if (pair.stars.size() == 2 && fit->chi2 - pair.chi2 > o.pair_chi2_gain) {
+      bool ok = true;
+      for (const FittedGaussian& g : pair.stars)
+        if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn || g.sigma_px > o.max_fwhm_ratio * image_sigma ||
+            g.sigma_px < o.min_fwhm_ratio * image_sigma)
+          ok = false;  // a pair of star images, each of the width expected here (not a cross's arms)
+      if (std::hypot(pair.stars[0].x_px - pair.stars[1].x_px, pair.stars[0].y_px - pair.stars[1].y_px) < 0.7 * o.psf_fwhm_px)
+        ok = false;
+      if (ok) {
+        *fit = std::move(pair);
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+// Where a component's point fits are reported from: its pixels, widths, noise, background and fit window.
+struct PointFitPlace {
+  const std::vector<FitPixel>* pixels;
+  double start_sigma, image_sigma, noise_dn;  // px, px, DN
+  const BackgroundMesh* mesh;
+  double sign;
+  long y0_abs;
+  Box window;  // absolute px: a fit that left it is dropped
+  bool clipped, truncated;
+};
+
+// The measured images of a component's fit (one star, or a blended pair): noise dropped, implausible
+// widths rejected, the rest measured with their flags.
+void ReportPointFits(const GaussianFitResult& fit, bool blended, const PointFitPlace& at, const StarDetectorOptions& o,
+                     std::vector<DetectedStar>* result) {
+  for (const FittedGaussian& g : fit.stars) {
+    // Noise first: a fit below the SNR limit is no image at all, not a defect worth a row.
+    if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn) continue;
+    // Width: only the implausible here; the test against the plate's width model at the image's
+    // place follows once every band is measured (JudgeShapes).
+    if (!WidthPlausible(o, g.sigma_px / at.start_sigma)) {
+      result->push_back(Defect(g.x_px, g.y_px, "shape"));
+      continue;
+    }
+    if (g.x_px < at.window.x0 || g.x_px > at.window.x1 || g.y_px < at.window.y0 || g.y_px > at.window.y1) continue;
+    DetectedStar d = MeasuredImage(g.x_px, g.y_px, g.sigma_x_px, g.sigma_y_px, g.correlation_xy, g.flux_dn,
+                                   g.sigma_flux_dn, at.mesh->LevelAt(g.x_px, g.y_px - at.y0_abs) + at.sign * fit.offset_dn);
+    d.peak_dn = g.flux_dn / (2.0 * M_PI * g.sigma_px * g.sigma_px);
+    d.fwhm_px = g.sigma_px * kFwhmPerSigma;
+    if (!blended) {
+      d.ellipticity = Ellipticity(*at.pixels, g.x_px, g.y_px, fit.offset_dn, std::max(g.sigma_px, at.image_sigma));
+      d.profile_misfit = ProfileMisfit(fit, g, at.noise_dn);
+    }
+    if (!blended && o.windowed_centroid) {
+      const Windowed w = WindowedCentroid(*at.pixels, g.x_px, g.y_px, fit.offset_dn, at.image_sigma, fit.residual_sigma_dn);
+      if (w.ok) {
+        d.point.position_px = {w.x, w.y};
+        d.point.sigma_x_px = w.sigma_x, d.point.sigma_y_px = w.sigma_y, d.point.correlation_xy = 0.0;
+      }
+    }
+    if (at.clipped) d.flags |= kStarSaturated;
+    if (blended) d.flags |= kStarBlended;
+    if (at.truncated) d.flags |= kStarTruncated;
+    if (d.ellipticity > o.max_ellipticity && d.snr > 20) d.flags |= kStarElongated;
+    result->push_back(d);
+  }
+}
+
 void ProcessBand(const Band& b, const StarDetectorOptions& o, const StarWidthModel& width_model, std::vector<DetectedStar>* out,
                  StarDetectionStats* stats) {
   const double sign = o.dark ? -1.0 : 1.0;
@@ -511,90 +620,11 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, const StarWidthMod
     // leaves a chi^2 excess of 5 sigma.
     const double snr1 = fit.stars[0].sigma_flux_dn > 0 ? fit.stars[0].flux_dn / fit.stars[0].sigma_flux_dn : 0.0;
     if ((ratio1 > 1.12 && snr1 > 30) || fit.chi2 > dof1 + 5.0 * std::sqrt(2.0 * dof1)) {
-      // Two stars along the component's major axis, split by the excess second moment.
-      double s = 0, sx = 0, sy = 0;
-      for (const FitPixel& p : pixels)
-        if (p.value_dn > 0) s += p.value_dn, sx += p.value_dn * p.x_px, sy += p.value_dn * p.y_px;
-      const double cx = fit.stars[0].x_px, cy = fit.stars[0].y_px;
-      double sxx = 0, syy = 0, sxy = 0, w = 0;
-      for (const FitPixel& p : pixels) {
-        const double dx = p.x_px - cx, dy = p.y_px - cy;
-        if (p.value_dn <= 0 || dx * dx + dy * dy > 36 * image_sigma * image_sigma) continue;
-        w += p.value_dn, sxx += p.value_dn * dx * dx, syy += p.value_dn * dy * dy, sxy += p.value_dn * dx * dy;
-      }
-      if (w > 0) {
-        Eigen::Matrix2d m;
-        m << sxx / w, sxy / w, sxy / w, syy / w;
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(m);
-        const Eigen::Vector2d axis = eig.eigenvectors().col(1);
-        const double h = std::sqrt(std::max(eig.eigenvalues()(1) - eig.eigenvalues()(0), 0.5));
-        FittedGaussian a = start, c = start;
-        a.x_px = cx + h * axis(0), a.y_px = cy + h * axis(1);
-        c.x_px = cx - h * axis(0), c.y_px = cy - h * axis(1);
-        a.flux_dn = c.flux_dn = 0.5 * fit.stars[0].flux_dn;
-        GaussianFitResult pair = star_internal::FitGaussians(pixels, {a, c}, noise, min_sigma);
-        // Second start: the single fit plus a star at the largest residual of the
-        // component (wider pairs, where the single fit sits on the brighter star).
-        {
-          const GaussianFitResult& f = fit;
-          const FittedGaussian& g = f.stars[0];
-          double worst = -1e30;
-          FittedGaussian second = start;
-          for (const FitPixel& p : pixels) {
-            if (labels.at<int>(int(p.y_px - b.y0_abs), int(p.x_px)) != l) continue;
-            const double model = f.offset_dn + g.flux_dn * std::exp(-0.5 * (std::pow(p.x_px - g.x_px, 2) + std::pow(p.y_px - g.y_px, 2)) /
-                                                                    (g.sigma_px * g.sigma_px)) / (2 * M_PI * g.sigma_px * g.sigma_px);
-            if (p.value_dn - model > worst) worst = p.value_dn - model, second.x_px = p.x_px, second.y_px = p.y_px;
-          }
-          second.flux_dn = std::max(worst, 0.0) * 2 * M_PI * image_sigma * image_sigma;
-          FittedGaussian first = g;
-          first.sigma_px = image_sigma;
-          GaussianFitResult alt = star_internal::FitGaussians(pixels, {first, second}, noise, min_sigma);
-          if (alt.stars.size() == 2 && (pair.stars.size() != 2 || alt.chi2 < pair.chi2)) pair = std::move(alt);
-        }
-        if (pair.stars.size() == 2 && fit.chi2 - pair.chi2 > o.pair_chi2_gain) {
-          bool ok = true;
-          for (const FittedGaussian& g : pair.stars)
-            if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn || g.sigma_px > o.max_fwhm_ratio * image_sigma ||
-                g.sigma_px < o.min_fwhm_ratio * image_sigma)
-              ok = false;  // a pair of star images, each of the width expected here (not a cross's arms)
-          if (std::hypot(pair.stars[0].x_px - pair.stars[1].x_px, pair.stars[0].y_px - pair.stars[1].y_px) < 0.7 * o.psf_fwhm_px)
-            ok = false;
-          if (ok) fit = std::move(pair), blended = true;
-        }
-      }
+      blended = TryPair(pixels, labels, l, b.y0_abs, start, image_sigma, noise, min_sigma, o, &fit);
     }
-    for (const FittedGaussian& g : fit.stars) {
-      // Noise first: a fit below the SNR limit is no image at all, not a defect worth a row.
-      if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn) continue;
-      // Width: only the implausible here; the test against the plate's width model at the image's
-      // place follows once every band is measured (JudgeShapes).
-      if (!WidthPlausible(o, g.sigma_px / psf_sigma)) {
-        result.push_back(Defect(g.x_px, g.y_px, "shape"));
-        continue;
-      }
-      if (g.x_px < x0 - 0.5 || g.x_px > x1 - 0.5 || g.y_px < b.y0_abs + y0 - 0.5 || g.y_px > b.y0_abs + y1 - 0.5) continue;
-      DetectedStar d = MeasuredImage(g.x_px, g.y_px, g.sigma_x_px, g.sigma_y_px, g.correlation_xy, g.flux_dn,
-                                     g.sigma_flux_dn, mesh.LevelAt(g.x_px, g.y_px - b.y0_abs) + sign * fit.offset_dn);
-      d.peak_dn = g.flux_dn / (2.0 * M_PI * g.sigma_px * g.sigma_px);
-      d.fwhm_px = g.sigma_px * kFwhmPerSigma;
-      if (!blended) {
-        d.ellipticity = Ellipticity(pixels, g.x_px, g.y_px, fit.offset_dn, std::max(g.sigma_px, image_sigma));
-        d.profile_misfit = ProfileMisfit(fit, g, noise);
-      }
-      if (!blended && o.windowed_centroid) {
-        const Windowed w = WindowedCentroid(pixels, g.x_px, g.y_px, fit.offset_dn, image_sigma, fit.residual_sigma_dn);
-        if (w.ok) {
-          d.point.position_px = {w.x, w.y};
-          d.point.sigma_x_px = w.sigma_x, d.point.sigma_y_px = w.sigma_y, d.point.correlation_xy = 0.0;
-        }
-      }
-      if (clipped > 0) d.flags |= kStarSaturated;
-      if (blended) d.flags |= kStarBlended;
-      if (truncated) d.flags |= kStarTruncated;
-      if (d.ellipticity > o.max_ellipticity && d.snr > 20) d.flags |= kStarElongated;
-      result.push_back(d);
-    }
+    const PointFitPlace at{&pixels, psf_sigma, image_sigma, noise, &mesh, sign, b.y0_abs,
+                           {x0 - 0.5, x1 - 0.5, b.y0_abs + y0 - 0.5, b.y0_abs + y1 - 0.5}, clipped > 0, truncated};
+    ReportPointFits(fit, blended, at, o, &result);
   });
   // A clump still holding a line after deblending holds a scratch: its other pieces are parts of it, or of
   // what it crosses (a reseau cross's arms, cut from it, pass as dashes): all rejected as the line. (A piece

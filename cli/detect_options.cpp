@@ -19,7 +19,7 @@ void AddFeatureOptions(OptionOverlay<DetectRequest>& o) {
   o.Flag("--bright-stars", [](DetectRequest& r) -> auto& { return r.stars_bright; },
          "stars are brighter than the background (default: dark, a negative)");
   o.Option("--star-fwhm-px", [](DetectRequest& r) -> auto& { return r.star_fwhm_px; },
-           "expected FWHM of a star image in px (default 2.5)")
+           "a star image's FWHM in px to start from; the plate's own stars then give the width at each place (default 2.5)")
       ->check(CLI::Range(0.5, 100.0));
 
   // Duty-cycle trails (seed 001): giving the start time switches them on. The parsed values live in

@@ -14,16 +14,17 @@
 
 #include "platemeter/calib/apparent_place.h"
 #include "platemeter/core/error.h"
+#include "support/sexagesimal.h"
 
 namespace platemeter::calib {
 namespace {
 
+using testing::Dms;
+using testing::Hms;
+
 constexpr double kPi = std::numbers::pi;
 constexpr double kArcsec = kPi / 648000.0;
 constexpr double kMas = kArcsec / 1000.0;
-
-double Hms(double h, double m, double s) { return (h + m / 60 + s / 3600) * kPi / 12; }
-double Dms(double sign, double d, double m, double s) { return sign * (d + m / 60 + s / 3600) * kPi / 180; }
 
 CatalogStar Star(double ra, double dec, double pmra_mas, double pmdec_mas, double plx_mas, double rv = 0.0) {
   CatalogStar s;

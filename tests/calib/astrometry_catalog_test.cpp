@@ -16,13 +16,13 @@
 #include "platemeter/core/error.h"
 #include "support/test_support.h"
 #include "platemeter/core/angles.h"
+#include "support/sexagesimal.h"
 
 namespace platemeter::calib {
 namespace {
 
-
-double Hms_(double h, double m, double s) { return (h + m / 60 + s / 3600) * std::numbers::pi / 12; }
-double Dms_(double sign, double d, double m, double s) { return sign * (d + m / 60 + s / 3600) * std::numbers::pi / 180; }
+using testing::Dms;
+using testing::Hms;
 
 struct KnownStar {
   const char* name;
@@ -32,12 +32,12 @@ struct KnownStar {
 
 // Hipparcos J2000 positions and V magnitudes.
 const KnownStar kKnown[] = {
-    {"Vega", Hms_(18, 36, 56.336), Dms_(+1, 38, 47, 1.28), 0.03, 172167},
-    {"Polaris", Hms_(2, 31, 49.095), Dms_(+1, 89, 15, 50.79), 1.97, 8890},
-    {"Sirius", Hms_(6, 45, 8.917), Dms_(-1, 16, 42, 58.02), -1.44, 48915},
-    {"Arcturus", Hms_(14, 15, 39.672), Dms_(+1, 19, 10, 56.68), -0.05, 124897},
-    {"Rigel", Hms_(5, 14, 32.272), Dms_(-1, 8, 12, 5.90), 0.18, 34085},
-    {"Deneb", Hms_(20, 41, 25.915), Dms_(+1, 45, 16, 49.22), 1.25, 197345},
+    {"Vega", Hms(18, 36, 56.336), Dms(+1, 38, 47, 1.28), 0.03, 172167},
+    {"Polaris", Hms(2, 31, 49.095), Dms(+1, 89, 15, 50.79), 1.97, 8890},
+    {"Sirius", Hms(6, 45, 8.917), Dms(-1, 16, 42, 58.02), -1.44, 48915},
+    {"Arcturus", Hms(14, 15, 39.672), Dms(+1, 19, 10, 56.68), -0.05, 124897},
+    {"Rigel", Hms(5, 14, 32.272), Dms(-1, 8, 12, 5.90), 0.18, 34085},
+    {"Deneb", Hms(20, 41, 25.915), Dms(+1, 45, 16, 49.22), 1.25, 197345},
 };
 
 bool CatalogPresent(const std::string& path) { return std::filesystem::is_regular_file(path); }
@@ -112,8 +112,8 @@ TEST_F(StarCatalogTest, ConeQueryEqualsBruteForce) {
   StarQueryOptions q;
   q.whole_sky = false;
   q.faint_limit_mag = 8.0;
-  q.center_ra_rad = Hms_(5, 35, 0);  // Orion
-  q.center_dec_rad = Dms_(-1, 5, 0, 0);
+  q.center_ra_rad = Hms(5, 35, 0);  // Orion
+  q.center_dec_rad = Dms(-1, 5, 0, 0);
   q.radius_rad = 12.0 * std::numbers::pi / 180;
   const auto cone = LoadStarCatalog(DefaultStarCatalogPath(), q);
   std::set<int64_t> got, want;

@@ -299,6 +299,27 @@ void Score(const char* name, const Run& run, const std::vector<TruthStar>& truth
   // Faint completeness at SNR 10..30 over all (also non-isolated) single stars.
 }
 
+// --width-px: every star image's Gaussian sigma (PSF and the scanner's blur_px) from min_px at the
+// plate's centre growing linearly with the distance to max_px at the farthest star; sigma_px per mark.
+void WidenStarImages(double min_px, double max_px, double blur_px, double pixel_um, sim::SimulatedPlate* plate,
+                     std::vector<double>* sigma_px) {
+  const double cx = 0.5 * plate->scene.width_px, cy = 0.5 * plate->scene.height_px;
+  std::vector<int> stars;  // their scene marks
+  for (size_t i = 0; i < plate->truth.size(); ++i)
+    if (plate->truth[i].kind == PointKind::kStar && plate->truth_mark[i] >= 0) stars.push_back(plate->truth_mark[i]);
+  auto radius = [&](int mark) {
+    const sim::SceneMark& m = plate->scene.marks[mark];
+    return std::hypot(m.centre_px.x_px - cx, m.centre_px.y_px - cy);
+  };
+  double r_max = 0;
+  for (int mark : stars) r_max = std::max(r_max, radius(mark));
+  for (int mark : stars) {
+    const double sigma = min_px + (max_px - min_px) * radius(mark) / r_max;
+    (*sigma_px)[mark] = sigma;
+    plate->scene.marks[mark].psf_fwhm_um = 2.3548 * std::sqrt(sigma * sigma - blur_px * blur_px) * pixel_um;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -365,21 +386,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "bench_stars: --width-px needs %.2f < A <= B\n", blur_px);
       return 2;
     }
-    const double cx = 0.5 * plate.scene.width_px, cy = 0.5 * plate.scene.height_px;
-    double r_max = 0;  // the farthest star from the centre
-    for (size_t i = 0; i < plate.truth.size(); ++i)
-      if (plate.truth[i].kind == PointKind::kStar && plate.truth_mark[i] >= 0) {
-        const sim::SceneMark& m = plate.scene.marks[plate.truth_mark[i]];
-        r_max = std::max(r_max, std::hypot(m.centre_px.x_px - cx, m.centre_px.y_px - cy));
-      }
-    for (size_t i = 0; i < plate.truth.size(); ++i) {
-      if (plate.truth[i].kind != PointKind::kStar || plate.truth_mark[i] < 0) continue;
-      sim::SceneMark& m = plate.scene.marks[plate.truth_mark[i]];
-      const double r = std::hypot(m.centre_px.x_px - cx, m.centre_px.y_px - cy) / r_max;
-      const double sigma_px = width_min_px + (width_max_px - width_min_px) * r;
-      star_sigma_px[plate.truth_mark[i]] = sigma_px;
-      m.psf_fwhm_um = 2.3548 * std::sqrt(sigma_px * sigma_px - blur_px * blur_px) * pixel_um;
-    }
+    WidenStarImages(width_min_px, width_max_px, blur_px, pixel_um, &plate, &star_sigma_px);
   }
   const double start_fwhm_px = given_fwhm_px > 0 ? given_fwhm_px : width_max_px > 0 ? 2.3548 * width_min_px : fwhm_px;
   const std::vector<sim::MarkCramerRao> crb = sim::CramerRaoBounds(plate.scene);

@@ -8,7 +8,6 @@
 
 #include "platemeter/detect/star_detector.h"
 #include "median.h"
-#include "star_internal.h"
 
 namespace platemeter {
 namespace {
@@ -73,11 +72,14 @@ StarWidthModel SettleStarWidthModel(const std::vector<DetectedStar>& stars, Star
 StarWidthModel FitStarWidthModel(const std::vector<DetectedStar>& stars, const StarWidthModel& reference) {
   StarWidthModel model = reference;
   std::vector<WidthSample> samples;
-  for (const DetectedStar& s : stars)
-    if (IsModelStar(s, reference))
-      samples.push_back({(s.point.position_px.x_px - model.centre_x_px) / model.half_width_px,
-                         (s.point.position_px.y_px - model.centre_y_px) / model.half_height_px,
-                         s.fwhm_px / star_internal::kFwhmPerSigma});
+  std::vector<double> misfits;  // the model stars' profile_misfit
+  for (const DetectedStar& s : stars) {
+    if (!IsModelStar(s, reference)) continue;
+    samples.push_back({(s.point.position_px.x_px - model.centre_x_px) / model.half_width_px,
+                       (s.point.position_px.y_px - model.centre_y_px) / model.half_height_px,
+                       s.fwhm_px / kFwhmPerSigma});
+    misfits.push_back(s.profile_misfit);
+  }
   const long n = static_cast<long>(samples.size());
   if (n < 3) return reference;
   model.degree = n >= 60 ? 2 : n >= 15 ? 1 : 0;
@@ -117,9 +119,6 @@ StarWidthModel FitStarWidthModel(const std::vector<DetectedStar>& stars, const S
   for (const WidthSample* s : kept)
     model.min_sigma_px = std::min(model.min_sigma_px, s->sigma_px), model.max_sigma_px = std::max(model.max_sigma_px, s->sigma_px);
   if (kept.empty()) model.min_sigma_px = model.max_sigma_px = c(0);
-  std::vector<double> misfits;
-  for (const DetectedStar& s : stars)
-    if (IsModelStar(s, reference)) misfits.push_back(s.profile_misfit);
   model.profile_misfit = detect_internal::Median(misfits);
   return model;
 }

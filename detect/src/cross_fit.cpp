@@ -111,11 +111,16 @@ std::vector<Sample> SelectSamples(const ImageWindow& window, const CrossFitStart
   return samples;
 }
 
-// Solves for all parameters, or with the shape (rotation, widths, length, blur)
-// held at its current values when `shape_fixed`: a first pass that cannot wander
-// off into a thin-line degeneracy while the position is still rough.
+// What a solve holds at its current values.
+enum class Held {
+  kShape,         // rotation, widths, length, blur: a first pass that cannot wander off into a
+                  // thin-line degeneracy while the position is still rough
+  kNothing,       // every parameter free
+  kWidthsAndBlur  // widths, length, blur (CrossFitStart::shape_known): the rotation free
+};
+
 bool Solve(const std::vector<Sample>& samples, double xc, double yc, const CrossFitOptions& options,
-           const CrossFitStart& start, bool shape_fixed, double* p, std::string* message) {
+           const CrossFitStart& start, Held held, double* p, std::string* message) {
   ceres::Problem problem;
   problem.AddResidualBlock(new CrossCost(&samples, xc, yc), nullptr, p);
   // The start is within about a line width; a fit that wants to leave this box has found something else.
@@ -124,9 +129,15 @@ bool Solve(const std::vector<Sample>& samples, double xc, double yc, const Cross
   problem.SetParameterUpperBound(p, kX0, start.centre_px.x_px + reach_px);
   problem.SetParameterLowerBound(p, kY0, start.centre_px.y_px - reach_px);
   problem.SetParameterUpperBound(p, kY0, start.centre_px.y_px + reach_px);
-  if (shape_fixed) {
+  if (held == Held::kShape) {
     problem.SetManifold(p, new ceres::SubsetManifold(kNumParams, {kTheta, kWidthH, kWidthV, kLength, kSigma}));
   } else {
+    problem.SetParameterLowerBound(p, kTheta, start.rotation_rad - 0.1);
+    problem.SetParameterUpperBound(p, kTheta, start.rotation_rad + 0.1);
+  }
+  if (held == Held::kWidthsAndBlur) {
+    problem.SetManifold(p, new ceres::SubsetManifold(kNumParams, {kWidthH, kWidthV, kLength, kSigma}));
+  } else if (held == Held::kNothing) {
     // Plausible ranges around the definition, so a bad pixel patch cannot turn the cross into something else.
     const double w = start.line_width_px;
     for (int k : {kWidthH, kWidthV}) {
@@ -137,8 +148,6 @@ bool Solve(const std::vector<Sample>& samples, double xc, double yc, const Cross
     problem.SetParameterUpperBound(p, kLength, 1.3 * start.arm_length_px + 2.0);
     problem.SetParameterLowerBound(p, kSigma, options.min_blur_sigma_px);
     problem.SetParameterUpperBound(p, kSigma, 2.0 * w + 3.0);
-    problem.SetParameterLowerBound(p, kTheta, start.rotation_rad - 0.1);
-    problem.SetParameterUpperBound(p, kTheta, start.rotation_rad + 0.1);
   }
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 11 parameters, thousands of residuals
@@ -152,6 +161,71 @@ bool Solve(const std::vector<Sample>& samples, double xc, double yc, const Cross
   ceres::Solve(solver, &problem, &summary);
   *message = summary.message;
   return summary.IsSolutionUsable();
+}
+
+// Formal errors of a converged fit, scaled by its own residual variance.
+struct FormalErrors {
+  Eigen::Matrix2d centre_covariance;
+  double gain_variance = 0.0;         // place and shape held, plane background free
+  double width_relative_sigma = 0.0;  // the worse of the two line widths' sigma / width (0: held)
+  double sigma0_sq = 0.0;
+};
+
+// Pseudo-inverse of a symmetric positive semi-definite matrix, scaled to unit
+// diagonal first so the tolerance is meaningful (width and blur of a thin line
+// are nearly interchangeable, which must not break the position's sigma);
+// zero rows (held parameters) stay zero.
+template <int N>
+Eigen::Matrix<double, N, N> ScaledPseudoInverse(const Eigen::Matrix<double, N, N>& m) {
+  const Eigen::Matrix<double, N, 1> scale = m.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const Eigen::Matrix<double, N, N> scaled = scale.asDiagonal() * m * scale.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eigen(scaled);
+  Eigen::Matrix<double, N, 1> inverse_values;
+  const double tolerance = 1e-10 * eigen.eigenvalues().maxCoeff();
+  for (int i = 0; i < N; ++i) inverse_values[i] = eigen.eigenvalues()[i] > tolerance ? 1.0 / eigen.eigenvalues()[i] : 0.0;
+  return scale.asDiagonal() * eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose() *
+         scale.asDiagonal();
+}
+
+// The centre's covariance is the Schur complement of the normal matrix on the
+// nuisance parameters; the widths' sigmas come from the whole normal matrix.
+FormalErrors ComputeFormalErrors(const std::vector<Sample>& samples, const double* p, double xc, double yc,
+                                 bool shape_held) {
+  using Normal = Eigen::Matrix<double, kNumParams, kNumParams>;
+  Normal normal = Normal::Zero();
+  double rss = 0.0;
+  for (const Sample& s : samples) {
+    Eigen::Matrix<double, kNumParams, 1> gradient;
+    const double residual = CrossModel(p, xc, yc, s, gradient.data()) - s.value_dn;
+    normal.selfadjointView<Eigen::Lower>().rankUpdate(gradient);
+    rss += residual * residual;
+  }
+  normal = normal.selfadjointView<Eigen::Lower>();
+  int free_params = kNumParams;
+  if (shape_held) {
+    for (int k : {kWidthH, kWidthV, kLength, kSigma}) {
+      normal.row(k).setZero();
+      normal.col(k).setZero();
+    }
+    free_params -= 4;
+  }
+  FormalErrors errors;
+  errors.sigma0_sq = rss / std::max(static_cast<int>(samples.size()) - free_params, 1);
+  constexpr int kNuisance = kNumParams - 2;
+  const Eigen::Matrix<double, 2, kNuisance> npn = normal.topRightCorner<2, kNuisance>();
+  const Eigen::Matrix<double, kNuisance, kNuisance> nnn_pinv =
+      ScaledPseudoInverse<kNuisance>(normal.bottomRightCorner<kNuisance, kNuisance>());
+  const Eigen::Matrix2d schur = normal.topLeftCorner<2, 2>() - npn * nnn_pinv * npn.transpose();
+  errors.centre_covariance = errors.sigma0_sq * schur.inverse();
+  // |gain| / sqrt(gain_variance) is the matched-filter SNR of the fitted cross.
+  const Eigen::Matrix4d gain_block = normal.block<4, 4>(kGain, kGain);
+  errors.gain_variance = errors.sigma0_sq * gain_block.inverse()(0, 0);
+  if (!shape_held) {
+    const Normal covariance = errors.sigma0_sq * ScaledPseudoInverse<kNumParams>(normal);
+    errors.width_relative_sigma = std::max(std::sqrt(std::max(covariance(kWidthH, kWidthH), 0.0)) / p[kWidthH],
+                                           std::sqrt(std::max(covariance(kWidthV, kWidthV), 0.0)) / p[kWidthV]);
+  }
+  return errors;
 }
 
 }  // namespace
@@ -216,8 +290,10 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
   p[kWidthH] = p[kWidthV] = start.line_width_px;
   p[kLength] = start.arm_length_px;
   // A generous blur widens the basin of the first pass (thin lines, rough start).
-  p[kSigma] = std::max({start.blur_sigma_px, options.min_blur_sigma_px, 0.5 * start.line_width_px + 0.5});
-  p[kGain] = gain / std::min(1.0, start.line_width_px);  // a sub-pixel line covers only part of a pixel
+  p[kSigma] = start.shape_known ? start.blur_sigma_px
+                                : std::max({start.blur_sigma_px, options.min_blur_sigma_px, 0.5 * start.line_width_px + 0.5});
+  p[kGain] = start.gain_dn != 0.0 ? start.gain_dn
+                                  : gain / std::min(1.0, start.line_width_px);  // a sub-pixel line covers only part of a pixel
   p[kB0] = background;
   if (gain == 0.0) {
     result.summary = "no contrast between the arms and the background";
@@ -225,8 +301,9 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
   }
 
   std::string message;
-  bool usable = Solve(samples, xc, yc, options, start, /*shape_fixed=*/true, p, &message) &&
-                Solve(samples, xc, yc, options, start, /*shape_fixed=*/false, p, &message);
+  const Held final_pass = start.shape_known ? Held::kWidthsAndBlur : Held::kNothing;
+  bool usable = Solve(samples, xc, yc, options, start, Held::kShape, p, &message) &&
+                Solve(samples, xc, yc, options, start, final_pass, p, &message);
   // Drop pixels that do not belong to a clean cross (dust, scratches, damage)
   // and solve again without them, so the final fit is plain least squares.
   const size_t all_pixels = samples.size();
@@ -245,7 +322,7 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
     }
     if (kept.size() == samples.size()) break;
     samples.swap(kept);
-    usable = Solve(samples, xc, yc, options, start, /*shape_fixed=*/false, p, &message);
+    usable = Solve(samples, xc, yc, options, start, final_pass, p, &message);
   }
   result.outlier_fraction = 1.0 - static_cast<double>(samples.size()) / static_cast<double>(all_pixels);
   if (!usable) {
@@ -253,39 +330,8 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
     return result;
   }
 
-  // Formal covariance of the centre: Schur complement of the normal matrix on
-  // the nuisance parameters (pseudo-inverse: width and blur of a thin line are
-  // nearly interchangeable, which must not break the position's sigma).
-  Eigen::Matrix<double, kNumParams, kNumParams> normal = Eigen::Matrix<double, kNumParams, kNumParams>::Zero();
-  double rss = 0.0;
-  for (const Sample& s : samples) {
-    Eigen::Matrix<double, kNumParams, 1> gradient;
-    const double residual = CrossModel(p, xc, yc, s, gradient.data()) - s.value_dn;
-    normal.selfadjointView<Eigen::Lower>().rankUpdate(gradient);
-    rss += residual * residual;
-  }
-  normal = normal.selfadjointView<Eigen::Lower>();
-  const int dof = static_cast<int>(samples.size()) - kNumParams;
-  const double sigma0_sq = rss / std::max(dof, 1);
-  constexpr int kNuisance = kNumParams - 2;
-  const Eigen::Matrix2d npp = normal.topLeftCorner<2, 2>();
-  const Eigen::Matrix<double, 2, kNuisance> npn = normal.topRightCorner<2, kNuisance>();
-  const Eigen::Matrix<double, kNuisance, kNuisance> nnn = normal.bottomRightCorner<kNuisance, kNuisance>();
-  // Scale the nuisance block to unit diagonal before the pseudo-inverse so the tolerance is meaningful.
-  const Eigen::Matrix<double, kNuisance, 1> scale = nnn.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
-  const Eigen::Matrix<double, kNuisance, kNuisance> scaled = scale.asDiagonal() * nnn * scale.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, kNuisance, kNuisance>> eigen(scaled);
-  Eigen::Matrix<double, kNuisance, 1> inverse_values;
-  const double tolerance = 1e-10 * eigen.eigenvalues().maxCoeff();
-  for (int i = 0; i < kNuisance; ++i) {
-    inverse_values[i] = eigen.eigenvalues()[i] > tolerance ? 1.0 / eigen.eigenvalues()[i] : 0.0;
-  }
-  const Eigen::Matrix<double, kNuisance, kNuisance> nnn_pinv =
-      scale.asDiagonal() * eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose() *
-      scale.asDiagonal();
-  const Eigen::Matrix2d schur = npp - npn * nnn_pinv * npn.transpose();
-  const Eigen::Matrix2d covariance = sigma0_sq * schur.inverse();
-
+  const FormalErrors errors = ComputeFormalErrors(samples, p, xc, yc, start.shape_known);
+  const Eigen::Matrix2d& covariance = errors.centre_covariance;
   result.converged = true;
   result.centre_px = {p[kX0], p[kY0]};
   result.sigma_x_px = std::sqrt(std::max(covariance(0, 0), 0.0));
@@ -298,7 +344,9 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
   result.blur_sigma_px = p[kSigma];
   result.gain_dn = p[kGain];
   result.background_dn = p[kB0];
-  result.residual_sigma_dn = std::sqrt(sigma0_sq);
+  result.residual_sigma_dn = std::sqrt(errors.sigma0_sq);
+  result.gain_sigma_dn = std::sqrt(std::max(errors.gain_variance, 0.0));
+  result.width_relative_sigma = errors.width_relative_sigma;
   result.pixels_used = static_cast<int>(samples.size());
   std::ostringstream summary;
   summary << "fitted on " << samples.size() << " px (" << static_cast<int>(100.0 * result.outlier_fraction + 0.5)

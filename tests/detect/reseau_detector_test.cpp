@@ -42,6 +42,13 @@ std::string SpecReseau(const std::string& camera, const std::string& scanner, co
          extra;
 }
 
+ReseauDetection DetectIkogonB(const std::string& image_path, double pixel_size_um) {
+  const DefinitionRegistry registry;
+  ReseauDetectorOptions options;
+  options.pixel_size_um = pixel_size_um;
+  return DetectReseau(Image::Open(image_path), registry.Grid("ikogon-b"), options);
+}
+
 TEST(ReseauDetector, RightIdsInARotatedMirroredDegradedScan) {
   testing::TempDir dir;
   const RenderedReseau r = RenderReseau(SpecReseau("sn004-terrain", "orientation_deg = 90\nmirrored = true\n",
@@ -49,10 +56,7 @@ TEST(ReseauDetector, RightIdsInARotatedMirroredDegradedScan) {
                                  "[defects]\ndust_count = 30\ndamaged_crosses = [\"X4Y4\"]\n"
                                  "[[defects.false_mark]]\nnear = \"X4Y4\"\noffset_um = [3000.0, 0.0]\n"),
                             dir);
-  const DefinitionRegistry registry;
-  ReseauDetectorOptions options;
-  options.pixel_size_um = 25.0;
-  const ReseauDetection d = DetectReseau(Image::Open(r.image_path), registry.Grid("ikogon-b"), options);
+  const ReseauDetection d = DetectIkogonB(r.image_path, 25.0);
   ASSERT_TRUE(d.found) << d.summary;
   EXPECT_EQ(d.orientation.Name(), "90m") << d.orientation_evidence;
   EXPECT_FALSE(d.orientation_ambiguous) << d.orientation_evidence;
@@ -78,6 +82,68 @@ TEST(ReseauDetector, RightIdsInARotatedMirroredDegradedScan) {
   const double z_rms = std::sqrt(sum_z2 / (2.0 * measured));
   EXPECT_GT(z_rms, 0.7);
   EXPECT_LT(z_rms, 1.5);
+}
+
+// Does a dust blob of the plate reach into the square of half side half_px around (x, y)?
+bool UnderDust(const sim::SimulatedPlate& plate, double x_px, double y_px, double half_px) {
+  for (int index : plate.dust) {
+    const sim::SceneMark& d = plate.scene.marks[index];
+    const double radius_px = 0.6 * d.size_um / plate.pixel_size_um + 3.0;
+    if (std::abs(d.centre_px.x_px - x_px) < half_px + radius_px && std::abs(d.centre_px.y_px - y_px) < half_px + radius_px)
+      return true;
+  }
+  return false;
+}
+
+// A faint grid (contrast 4 noise sigmas per pixel) on an 8-bit negative scan,
+// mirrored and rotated, with dust stronger than the crosses and six crosses never
+// exposed: every present cross clear of dust whose Cramer-Rao bound is below
+// 0.05 px is measured, with the sigma its scatter has; no absent cross is measured.
+TEST(ReseauDetector, FaintCrossesAreMeasuredDownToTheNoise) {
+  testing::TempDir dir;
+  const std::string absent = "\"X2Y2\", \"X5Y7\", \"X9Y3\", \"X11Y10\", \"X6Y1\", \"X1Y6\"";
+  const double noise_dn = std::hypot(1.2, 1.5);
+  RenderedReseau r = RenderReseau(
+      "name = \"faint\"\ncamera = \"sn004-terrain\"\nseed = 7\n"
+      "[output]\npixel_size_um = 12.5\nbits = 8\nmargin_mm = 1.0\n"
+      "[scanner]\nrotation_deg = 0.3\norientation_deg = 270\nmirrored = true\n"
+      "[marks.reseau]\npolarity = \"bright\"\ncontrast_dn = " + std::to_string(4.0 * noise_dn) + "\n"
+      "[marks.fiducials]\npolarity = \"bright\"\ncontrast_dn = 70.0\n"
+      "[background]\nlevel_dn = 160.0\nterrain_amplitude_dn = 24.0\nterrain_scale_mm = 15.0\n"
+      "[noise]\nblur_sigma_um = 6.0\nsensor_sigma_dn = 1.2\ngrain_sigma_dn = 1.5\n"
+      "[defects]\ndust_count = 200\ndust_contrast_dn = 35.0\nmissing_crosses = [" + absent + "]\n",
+      dir);
+  sim::ComputeCramerRaoBounds(&r.plate);
+  const ReseauDetection d = DetectIkogonB(r.image_path, 12.5);
+  ASSERT_TRUE(d.found) << d.summary;
+  EXPECT_EQ(d.orientation.Name(), "270m") << d.orientation_evidence;
+  std::map<std::string, const MeasuredPoint*> truth;
+  for (const MeasuredPoint& p : r.plate.truth)
+    if (p.kind == PointKind::kReseau) truth[p.id] = &p;
+  int measurable = 0, measured = 0;
+  double sum_z2 = 0, sum_crb = 0;
+  for (const DetectedPoint& p : d.points) {
+    const MeasuredPoint& t = *truth.at(p.id);
+    if (std::find(t.flags.begin(), t.flags.end(), "absent") != t.flags.end()) {
+      EXPECT_NE(p.status, PointStatus::kMeasured) << p.id << " was never exposed";
+      continue;
+    }
+    const double crb_px = std::hypot(*t.crb_x_px, *t.crb_y_px) / std::sqrt(2.0);
+    sum_crb += crb_px;
+    if (crb_px >= 0.05 || UnderDust(r.plate, *t.x_px, *t.y_px, 0.5 * 600.0 / 12.5)) continue;
+    ++measurable;
+    EXPECT_EQ(p.status, PointStatus::kMeasured) << p.id << ": " << p.reason;
+    if (p.status != PointStatus::kMeasured) continue;
+    ++measured;
+    const double dx = p.position_px.x_px - *t.x_px, dy = p.position_px.y_px - *t.y_px;
+    sum_z2 += dx * dx / (p.sigma_x_px * p.sigma_x_px) + dy * dy / (p.sigma_y_px * p.sigma_y_px);
+  }
+  EXPECT_GE(measurable, 90) << "mean CRB " << sum_crb / 115 << " px: the plate is not the faint case meant";
+  EXPECT_EQ(measured, measurable);
+  // 2 x ~110 normalised errors: their RMS scatters by about 7 %.
+  const double z_rms = std::sqrt(sum_z2 / (2.0 * measured));
+  EXPECT_GT(z_rms, 0.8);
+  EXPECT_LT(z_rms, 1.25);
 }
 
 TEST(ReseauDetector, RegularGridOrientationIsAmbiguousUnlessGiven) {

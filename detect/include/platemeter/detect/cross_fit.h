@@ -44,6 +44,11 @@ struct CrossFitStart {
   double line_width_px = 4.0;  // nominal line width
   double arm_length_px = 100.0;  // nominal tip-to-tip length
   double blur_sigma_px = 0.7;  // starting blur
+  // The widths (both line_width_px), length and blur are known (e.g. the plate's
+  // own crosses' shape) and held: only the place, rotation, contrast and
+  // background are fitted. For faint crosses, whose pixels cannot pin the shape.
+  bool shape_known = false;
+  double gain_dn = 0.0;        // contrast to start from (negative: dark); 0: estimated from the pixels
 };
 
 struct CrossFitResult {
@@ -60,6 +65,14 @@ struct CrossFitResult {
   double gain_dn = 0.0;          // cross contrast (negative: dark cross)
   double background_dn = 0.0;
   double residual_sigma_dn = 0.0;   // RMS residual of the final fit (its sigma0)
+  // Formal sigma of gain_dn with the place and shape held at the fit and the plane
+  // background free (scaled by sigma0): |gain_dn| / gain_sigma_dn is the cross's
+  // matched-filter SNR, the noise limit of telling it from background.
+  double gain_sigma_dn = 0.0;
+  // Formal sigma of the line widths over their value (the worse of the two; 0
+  // when the shape was held): above about 0.1 the cross's pixels do not pin its
+  // shape, and the linearised sigmas of a free-shape fit are optimistic.
+  double width_relative_sigma = 0.0;
   double outlier_fraction = 0.0;    // share of pixels dropped as outliers
   int pixels_used = 0;
   int pixels_masked = 0;            // masked pixels in the fit region, left out

@@ -6,7 +6,9 @@
 //   3. refinement: least-squares cross model on the scan's own pixels for every
 //      grid point, at its candidate or, for a miss, at its predicted position
 //      (a second search), giving position and formal sigma (cross_fit.h);
-//   4. checks: contrast, fit quality, defects, and each cross against the
+//      crosses whose pixels cannot pin their shape (faint ones) fitted again
+//      with the plate's own cross shape held;
+//   4. checks: matched-filter SNR, fit quality, defects, and each cross against the
 //      residual field of its neighbours; a status and reason per cross.
 // Orientations that the grid's layout cannot tell apart (a regular square grid)
 // are separated by the grid's calibrated deviations from regularity, measured
@@ -27,7 +29,7 @@ namespace platemeter {
 struct ReseauDetectorOptions {
   double pixel_size_um = 0.0;                  // um; the scan's pixel size (required)
   std::optional<ScanOrientation> orientation;  // known orientation (skips the search over 8)
-  double min_contrast_snr = 8.0;        // |cross contrast| / residual sigma below this: rejected, low_contrast
+  double min_matched_filter_snr = 8.0;  // |cross contrast| / its sigma (cross_fit.h: gain_sigma_dn) below this: missing, low_contrast
   double max_shift_fraction = 0.25;     // a fit that moves further than this share of the grid spacing from its start: rejected, poor_fit
   double neighbour_outlier_sigma = 5.0; // deviation from the neighbours' residual field, in combined sigmas: rejected, outlier
   double orientation_min_excess_chi2 = 25.0;  // the runner-up orientation's chi2 must exceed the best's by this (scaled) to decide

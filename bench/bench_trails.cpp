@@ -3,7 +3,8 @@
 // a plate of catalog stars to V = 8 (kstars-data), scored against the
 // simulator's truth: the share of trail dots found, assigned to the right star
 // and trail and time-tagged correctly, wrong assignments, the dots' position
-// error, wall time and peak RSS; SEP's extraction (bench_stars' child mode) on
+// error, the reseau crosses among the trails (measured, within 3 formal sigmas),
+// wall time and peak RSS; SEP's extraction (bench_stars' child mode) on
 // the same image for the throughput comparison.
 //
 //   bench_trails [--pixel-um 20] [--mag-limit 8] [--rows N] [--min-snr 20] [--keep DIR [--reuse]] [--no-sep]
@@ -158,6 +159,40 @@ class TruthIndex {
   std::unordered_map<long long, std::vector<size_t>> cells_;
 };
 
+// A reseau cross of the truth, inside the scanned rows.
+struct TruthCross {
+  std::string id;
+  double x_px = 0, y_px = 0;
+};
+
+// The crosses among the trails (#26: crosses that star images lie on): how many
+// measured, their errors against their formal sigmas, and the others' reasons.
+void ScoreCrosses(const std::vector<TruthCross>& crosses, const MeasurementFile& measured) {
+  std::map<std::string, const TruthCross*> truth;
+  for (const TruthCross& c : crosses) truth[c.id] = &c;
+  long count = 0, within = 0;
+  double norm2 = 0, worst = 0;
+  std::map<std::string, long> reasons;
+  for (const MeasuredPoint& p : measured.points) {
+    if (p.kind != PointKind::kReseau || !truth.count(p.id)) continue;
+    if (p.status != PointStatus::kMeasured) {
+      for (const std::string& flag : p.flags) ++reasons[flag];
+      continue;
+    }
+    const TruthCross& t = *truth[p.id];
+    const double zx = (*p.x_px - t.x_px) / *p.sigma_x_px, zy = (*p.y_px - t.y_px) / *p.sigma_y_px;
+    ++count;
+    within += std::abs(zx) <= 3.0 && std::abs(zy) <= 3.0;
+    norm2 += zx * zx + zy * zy;
+    worst = std::max({worst, std::abs(zx), std::abs(zy)});
+  }
+  std::printf("reseau crosses in the scan: %zu; measured %ld, of which within 3 formal sigmas %ld; RMS(error / sigma) "
+              "%.2f, largest |error| / sigma %.1f; not measured:",
+              crosses.size(), count, within, std::sqrt(norm2 / std::max(1L, 2 * count)), worst);
+  for (const auto& [reason, n] : reasons) std::printf(" %s=%ld", reason.c_str(), n);
+  std::printf("\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -208,6 +243,7 @@ int main(int argc, char** argv) {
   // ---- the plate: built, rendered and reduced to the truth the score needs, then freed, so that the
   // children's peak RSS (which counts the parent's resident pages at fork) is their own.
   std::vector<TruthImage> truth_images;
+  std::vector<TruthCross> truth_crosses;
   std::vector<std::string> star_names;
   long width = 0, height = 0;
   char scan_name[96];
@@ -244,6 +280,11 @@ int main(int argc, char** argv) {
     const sim::SceneNoise& noise = plate.scene.noise;
     const double sigma_dn = std::hypot(noise.sensor_sigma_dn, noise.grain_sigma_dn);
     std::map<std::string, int> star_index;
+    for (const MeasuredPoint& t : plate.truth) {
+      const bool inside = t.x_px && *t.y_px > static_cast<double>(y_begin) + 40 && *t.y_px < static_cast<double>(y_end) - 40;
+      if (t.kind == PointKind::kReseau && t.flags.empty() && inside)
+        truth_crosses.push_back({t.id, *t.x_px, *t.y_px - static_cast<double>(y_begin)});
+    }
     for (size_t i = 0; i < plate.truth.size(); ++i) {
       const MeasuredPoint& t = plate.truth[i];
       if ((t.kind != PointKind::kTrailDot && t.kind != PointKind::kTrailDash) || plate.truth_mark[i] < 0) continue;
@@ -523,6 +564,8 @@ int main(int argc, char** argv) {
     // The rows' positions: each image's own measurement (the track's until 2026-11-26: docs/detect.md).
     std::printf("right dots' position error (own measurement): RMS %.4f px per axis, RMS(error / sigma) %.2f\n",
                 std::sqrt(err2 / (2.0 * n_err)), std::sqrt(norm2 / (2.0 * n_err)));
+
+  ScoreCrosses(truth_crosses, measured);
 
   // ---- SEP on the same image (bench_stars' child mode), for the throughput
   const std::string bench_stars = (fs::path(argv[0]).parent_path() / "bench_stars").string();

@@ -167,7 +167,6 @@ bool Solve(const std::vector<Sample>& samples, double xc, double yc, const Cross
 struct FormalErrors {
   Eigen::Matrix2d centre_covariance;
   double gain_variance = 0.0;         // place and shape held, plane background free
-  double width_relative_sigma = 0.0;  // the worse of the two line widths' sigma / width (0: held)
   double sigma0_sq = 0.0;
 };
 
@@ -187,45 +186,109 @@ Eigen::Matrix<double, N, N> ScaledPseudoInverse(const Eigen::Matrix<double, N, N
          scale.asDiagonal();
 }
 
-// The centre's covariance is the Schur complement of the normal matrix on the
-// nuisance parameters; the widths' sigmas come from the whole normal matrix.
-FormalErrors ComputeFormalErrors(const std::vector<Sample>& samples, const double* p, double xc, double yc,
-                                 bool shape_held) {
-  using Normal = Eigen::Matrix<double, kNumParams, kNumParams>;
+using Normal = Eigen::Matrix<double, kNumParams, kNumParams>;
+
+// The normal matrix of the fit at p over the samples (and, when rss != nullptr,
+// the residual sum of squares); a held shape's rows and columns are zero.
+Normal NormalMatrix(const std::vector<Sample>& samples, const double* p, double xc, double yc, bool shape_held,
+                    double* rss) {
   Normal normal = Normal::Zero();
-  double rss = 0.0;
   for (const Sample& s : samples) {
     Eigen::Matrix<double, kNumParams, 1> gradient;
     const double residual = CrossModel(p, xc, yc, s, gradient.data()) - s.value_dn;
     normal.selfadjointView<Eigen::Lower>().rankUpdate(gradient);
-    rss += residual * residual;
+    if (rss) *rss += residual * residual;
   }
   normal = normal.selfadjointView<Eigen::Lower>();
-  int free_params = kNumParams;
   if (shape_held) {
     for (int k : {kWidthH, kWidthV, kLength, kSigma}) {
       normal.row(k).setZero();
       normal.col(k).setZero();
     }
-    free_params -= 4;
   }
-  FormalErrors errors;
-  errors.sigma0_sq = rss / std::max(static_cast<int>(samples.size()) - free_params, 1);
+  return normal;
+}
+
+// The information on the centre: the Schur complement of the normal matrix on
+// the nuisance parameters.
+Eigen::Matrix2d CentreInformation(const Normal& normal) {
   constexpr int kNuisance = kNumParams - 2;
   const Eigen::Matrix<double, 2, kNuisance> npn = normal.topRightCorner<2, kNuisance>();
   const Eigen::Matrix<double, kNuisance, kNuisance> nnn_pinv =
       ScaledPseudoInverse<kNuisance>(normal.bottomRightCorner<kNuisance, kNuisance>());
-  const Eigen::Matrix2d schur = normal.topLeftCorner<2, 2>() - npn * nnn_pinv * npn.transpose();
-  errors.centre_covariance = errors.sigma0_sq * schur.inverse();
+  return normal.topLeftCorner<2, 2>() - npn * nnn_pinv * npn.transpose();
+}
+
+// The centre's covariance from its information, and the gain's variance.
+FormalErrors ComputeFormalErrors(const std::vector<Sample>& samples, const double* p, double xc, double yc,
+                                 bool shape_held) {
+  double rss = 0.0;
+  const Normal normal = NormalMatrix(samples, p, xc, yc, shape_held, &rss);
+  const int free_params = shape_held ? kNumParams - 4 : kNumParams;
+  FormalErrors errors;
+  errors.sigma0_sq = rss / std::max(static_cast<int>(samples.size()) - free_params, 1);
+  errors.centre_covariance = errors.sigma0_sq * CentreInformation(normal).inverse();
   // |gain| / sqrt(gain_variance) is the matched-filter SNR of the fitted cross.
   const Eigen::Matrix4d gain_block = normal.block<4, 4>(kGain, kGain);
   errors.gain_variance = errors.sigma0_sq * gain_block.inverse()(0, 0);
-  if (!shape_held) {
-    const Normal covariance = errors.sigma0_sq * ScaledPseudoInverse<kNumParams>(normal);
-    errors.width_relative_sigma = std::max(std::sqrt(std::max(covariance(kWidthH, kWidthH), 0.0)) / p[kWidthH],
-                                           std::sqrt(std::max(covariance(kWidthV, kWidthV), 0.0)) / p[kWidthV]);
-  }
   return errors;
+}
+
+// The share of the centre's information (1 / variance, the worse axis) that the
+// kept pixels hold of what the whole region would with a clean cross.
+double InformationKept(const std::vector<Sample>& all, const std::vector<Sample>& kept, const double* p, double xc,
+                       double yc, bool shape_held) {
+  if (kept.size() == all.size()) return 1.0;
+  const Eigen::Matrix2d all_covariance = CentreInformation(NormalMatrix(all, p, xc, yc, shape_held, nullptr)).inverse();
+  const Eigen::Matrix2d kept_covariance = CentreInformation(NormalMatrix(kept, p, xc, yc, shape_held, nullptr)).inverse();
+  return std::min(all_covariance(0, 0) / kept_covariance(0, 0), all_covariance(1, 1) / kept_covariance(1, 1));
+}
+
+// The samples whose residual from the model lies beyond the outlier limit, the
+// limit from the robust scatter of the samples not yet dropped.
+std::vector<char> FlagOutliers(const std::vector<Sample>& samples, const std::vector<char>& dropped, const double* p,
+                               double xc, double yc, const CrossFitOptions& options) {
+  std::vector<double> abs_residuals(samples.size()), kept_residuals;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    abs_residuals[i] = std::abs(CrossModel(p, xc, yc, samples[i], nullptr) - samples[i].value_dn);
+    if (!dropped[i]) kept_residuals.push_back(abs_residuals[i]);
+  }
+  const double robust_sigma = 1.4826 * Median(kept_residuals);
+  // The floor keeps a nearly noise-free scan from losing pixels to tiny model
+  // differences; real defects deviate by a large part of the contrast.
+  const double limit = std::max(options.outlier_threshold * robust_sigma, options.min_outlier_contrast * std::abs(p[kGain]));
+  std::vector<char> flags(samples.size(), 0);
+  for (size_t i = 0; i < samples.size(); ++i) flags[i] = abs_residuals[i] > limit;
+  return flags;
+}
+
+// Grows the flagged samples by margin_px (a square) on the window's pixel grid.
+std::vector<char> GrowFlags(const std::vector<Sample>& samples, const std::vector<char>& flags, const PixelRect& rect,
+                            long margin_px) {
+  if (margin_px <= 0) return flags;
+  std::vector<char> grid(static_cast<size_t>(rect.width_px * rect.height_px), 0);
+  auto cell = [&](long col, long row) -> char& {
+    return grid[static_cast<size_t>((row - rect.y0_px) * rect.width_px + (col - rect.x0_px))];
+  };
+  for (size_t i = 0; i < samples.size(); ++i) {
+    if (!flags[i]) continue;
+    const long col = static_cast<long>(samples[i].x_px), row = static_cast<long>(samples[i].y_px);
+    for (long r = std::max(rect.y0_px, row - margin_px); r <= std::min(rect.y_end_px() - 1, row + margin_px); ++r)
+      for (long c = std::max(rect.x0_px, col - margin_px); c <= std::min(rect.x_end_px() - 1, col + margin_px); ++c)
+        cell(c, r) = 1;
+  }
+  std::vector<char> grown(samples.size(), 0);
+  for (size_t i = 0; i < samples.size(); ++i)
+    grown[i] = cell(static_cast<long>(samples[i].x_px), static_cast<long>(samples[i].y_px));
+  return grown;
+}
+
+std::vector<Sample> Kept(const std::vector<Sample>& samples, const std::vector<char>& dropped) {
+  std::vector<Sample> kept;
+  kept.reserve(samples.size());
+  for (size_t i = 0; i < samples.size(); ++i)
+    if (!dropped[i]) kept.push_back(samples[i]);
+  return kept;
 }
 
 }  // namespace
@@ -234,9 +297,10 @@ bool CrossFitOptions::Check(std::string* why) const {
   if (!(margin_px >= 0.0)) return *why = "margin_px must be >= 0", false;
   if (!(min_blur_sigma_px > 0.0)) return *why = "min_blur_sigma_px must be > 0", false;
   if (!(outlier_threshold > 1.0)) return *why = "outlier_threshold must be > 1", false;
-  if (!(max_outlier_fraction >= 0.0 && max_outlier_fraction < 1.0)) {
-    return *why = "max_outlier_fraction must be in [0, 1)", false;
+  if (!(min_information_kept > 0.0 && min_information_kept <= 1.0)) {
+    return *why = "min_information_kept must be in (0, 1]", false;
   }
+  if (!(foreign_margin_blurs >= 0.0)) return *why = "foreign_margin_blurs must be >= 0", false;
   if (!(max_masked_fraction >= 0.0 && max_masked_fraction < 1.0)) {
     return *why = "max_masked_fraction must be in [0, 1)", false;
   }
@@ -292,8 +356,7 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
   // A generous blur widens the basin of the first pass (thin lines, rough start).
   p[kSigma] = start.shape_known ? start.blur_sigma_px
                                 : std::max({start.blur_sigma_px, options.min_blur_sigma_px, 0.5 * start.line_width_px + 0.5});
-  p[kGain] = start.gain_dn != 0.0 ? start.gain_dn
-                                  : gain / std::min(1.0, start.line_width_px);  // a sub-pixel line covers only part of a pixel
+  p[kGain] = gain / std::min(1.0, start.line_width_px);  // a sub-pixel line covers only part of a pixel
   p[kB0] = background;
   if (gain == 0.0) {
     result.summary = "no contrast between the arms and the background";
@@ -304,27 +367,31 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
   const Held final_pass = start.shape_known ? Held::kWidthsAndBlur : Held::kNothing;
   bool usable = Solve(samples, xc, yc, options, start, Held::kShape, p, &message) &&
                 Solve(samples, xc, yc, options, start, final_pass, p, &message);
-  // Drop pixels that do not belong to a clean cross (dust, scratches, damage)
-  // and solve again without them, so the final fit is plain least squares.
-  const size_t all_pixels = samples.size();
+  // Drop pixels that do not belong to a clean cross (dust, scratches, damage,
+  // star images) and solve again without them, so the final fit is plain least
+  // squares: first the outliers of the first fit; then, afresh, those of the fit
+  // without them (the first fit, bent toward the foreign pixels, also misfits
+  // some of the cross's own), with a margin around each (their blurred edges
+  // still pull) of the clean fit's blur.
+  const std::vector<Sample> all_samples = samples;
+  std::vector<char> dropped(all_samples.size(), 0);
   for (int round = 0; usable && round < 2; ++round) {
-    std::vector<double> abs_residuals;
-    abs_residuals.reserve(samples.size());
-    for (const Sample& s : samples) abs_residuals.push_back(std::abs(CrossModel(p, xc, yc, s, nullptr) - s.value_dn));
-    const double robust_sigma = 1.4826 * Median(abs_residuals);
-    // The floor keeps a nearly noise-free scan from losing pixels to tiny model
-    // differences; real defects deviate by a large part of the contrast.
-    const double limit = std::max(options.outlier_threshold * robust_sigma, options.min_outlier_contrast * std::abs(p[kGain]));
-    std::vector<Sample> kept;
-    kept.reserve(samples.size());
-    for (size_t i = 0; i < samples.size(); ++i) {
-      if (abs_residuals[i] <= limit) kept.push_back(samples[i]);
+    const std::vector<char> flags = FlagOutliers(all_samples, dropped, p, xc, yc, options);
+    const long margin_px = std::lround(options.foreign_margin_blurs * p[kSigma]);
+    std::vector<char> next = round == 0 ? flags : GrowFlags(all_samples, flags, window.rect, margin_px);
+    if (next == dropped) break;
+    dropped.swap(next);
+    std::vector<Sample> kept = Kept(all_samples, dropped);
+    if (kept.size() < 4 * kNumParams) {
+      usable = false;
+      message = "too few clean pixels left";
+      break;
     }
-    if (kept.size() == samples.size()) break;
     samples.swap(kept);
     usable = Solve(samples, xc, yc, options, start, final_pass, p, &message);
   }
-  result.outlier_fraction = 1.0 - static_cast<double>(samples.size()) / static_cast<double>(all_pixels);
+  result.outlier_fraction = 1.0 - static_cast<double>(samples.size()) / static_cast<double>(all_samples.size());
+  if (usable) result.information_kept = InformationKept(all_samples, samples, p, xc, yc, start.shape_known);
   if (!usable) {
     result.summary = "the cross fit did not converge (" + message + ")";
     return result;
@@ -346,7 +413,6 @@ CrossFitResult FitCross(const ImageWindow& window, const CrossFitStart& start, c
   result.background_dn = p[kB0];
   result.residual_sigma_dn = std::sqrt(errors.sigma0_sq);
   result.gain_sigma_dn = std::sqrt(std::max(errors.gain_variance, 0.0));
-  result.width_relative_sigma = errors.width_relative_sigma;
   result.pixels_used = static_cast<int>(samples.size());
   std::ostringstream summary;
   summary << "fitted on " << samples.size() << " px (" << static_cast<int>(100.0 * result.outlier_fraction + 0.5)

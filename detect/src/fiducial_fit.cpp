@@ -239,7 +239,6 @@ CrossFitOptions CrossOptions(const MarkFitOptions& options) {
   c.min_blur_sigma_px = options.min_blur_sigma_px;
   c.outlier_threshold = options.outlier_threshold;
   c.min_outlier_contrast = options.min_outlier_contrast;
-  c.max_outlier_fraction = options.max_outlier_fraction;
   c.max_masked_fraction = options.max_masked_fraction;
   c.max_iterations = options.max_iterations;
   return c;

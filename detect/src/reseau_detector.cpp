@@ -8,7 +8,6 @@
 #include <cmath>
 #include <optional>
 #include <sstream>
-#include <tuple>
 
 #include "platemeter/detect/overview.h"
 
@@ -32,6 +31,11 @@ double SpacingMm(const MasterGrid& grid) {
     distances.push_back(best);
   }
   return Median(distances);
+}
+
+// The cross's contrast over its own sigma (cross_fit.h: gain_sigma_dn).
+double MatchedFilterSnr(const CrossFitResult& fit) {
+  return std::abs(fit.gain_dn) / std::max(fit.gain_sigma_dn, 1e-300);
 }
 
 // Fits one grid point's cross, starting at `start_px`; fills the point and its fit.
@@ -61,56 +65,47 @@ void RefineOne(const Image& image, const CrossFitStart& start, const ReseauDetec
   point->sigma_y_px = fit->sigma_y_px;
   point->correlation_xy = fit->correlation_xy;
   const double shift = std::hypot(fit->centre_px.x_px - start.centre_px.x_px, fit->centre_px.y_px - start.centre_px.y_px);
-  const double snr = std::abs(fit->gain_dn) / std::max(fit->gain_sigma_dn, 1e-300);
-  if ((fit->gain_dn < 0 ? -1 : 1) != polarity || snr < options.min_matched_filter_snr) {
+  const double snr = MatchedFilterSnr(*fit);
+  // Too little of a clean cross left is a defect whatever the rest's contrast (a
+  // fit on the remnants of a damaged cross has none to speak of).
+  if (fit->information_kept < options.fit.min_information_kept) {
+    point->status = PointStatus::kRejected;
+    point->reason = "defect";
+    point->sigma_x_px = point->sigma_y_px = point->correlation_xy = 0.0;  // a fit on remnants: no sigma to state
+  } else if ((fit->gain_dn < 0 ? -1 : 1) != polarity || snr < options.min_matched_filter_snr) {
     point->status = PointStatus::kMissing;  // nothing cross-like of the right polarity there
     point->reason = "low_contrast";
   } else if (shift > max_shift_px) {
     point->status = PointStatus::kRejected;
     point->reason = "poor_fit";
-  } else if (fit->outlier_fraction > options.fit.max_outlier_fraction) {
-    point->status = PointStatus::kRejected;
-    point->reason = "defect";
   } else {
     point->status = PointStatus::kMeasured;
     point->reason.clear();
   }
 }
 
-// The plate's cross shape, for the crosses whose own pixels cannot pin theirs: the
-// medians over the crosses that do (all crosses of a plate share the reseau's lines
-// and the scan's blur). With fewer than kMinShapeCrosses of them, over every measured
-// cross: the median of many noisy shapes still beats one.
-constexpr double kShapePinnedRelativeSigma = 0.1;  // cross_fit.h: width_relative_sigma
-constexpr size_t kMinShapeCrosses = 5;
+// Below this matched-filter SNR a cross's own pixels do not pin its shape (two
+// widths, length, blur) well enough for the linearised sigma of a free-shape fit:
+// 1.21 x the scatter at an SNR of 18 (cross_fit_test.cpp), 1.03 x at 30 to 47
+// (bench_reseau faint4). Such crosses are fitted again with the plate's shape held.
+constexpr double kFreeShapeMinSnr = 30.0;
 
+// The plate's cross shape: the medians over the crosses measured with a free
+// shape (all crosses of a plate share the reseau's lines and the scan's blur).
 std::optional<CrossFitStart> PlateCrossShape(const std::vector<DetectedPoint>& points,
                                              const std::vector<CrossFitResult>& fits) {
-  std::vector<double> widths, lengths, blurs, gains, all_widths, all_lengths, all_blurs, all_gains;
+  std::vector<double> widths, lengths, blurs;
   for (size_t g = 0; g < points.size(); ++g) {
     if (points[g].status != PointStatus::kMeasured) continue;
-    const CrossFitResult& f = fits[g];
-    const bool pinned = f.width_relative_sigma < kShapePinnedRelativeSigma;
-    for (auto [list, all, value] : {std::tuple{&widths, &all_widths, 0.5 * (f.width_h_px + f.width_v_px)},
-                                    std::tuple{&lengths, &all_lengths, f.arm_length_px},
-                                    std::tuple{&blurs, &all_blurs, f.blur_sigma_px},
-                                    std::tuple{&gains, &all_gains, f.gain_dn}}) {
-      all->push_back(value);
-      if (pinned) list->push_back(value);
-    }
+    widths.push_back(0.5 * (fits[g].width_h_px + fits[g].width_v_px));
+    lengths.push_back(fits[g].arm_length_px);
+    blurs.push_back(fits[g].blur_sigma_px);
   }
-  if (widths.size() < kMinShapeCrosses) {
-    widths.swap(all_widths);
-    lengths.swap(all_lengths);
-    blurs.swap(all_blurs);
-    gains.swap(all_gains);
-  }
-  if (widths.size() < kMinShapeCrosses) return std::nullopt;
+  if (widths.size() < 5) return std::nullopt;  // too few to tell the plate's shape from one cross's
   CrossFitStart shape;
   shape.line_width_px = Median(widths);
   shape.arm_length_px = Median(lengths);
   shape.blur_sigma_px = Median(blurs);
-  shape.gain_dn = Median(gains);
   shape.shape_known = true;
   return shape;
 }
@@ -328,20 +323,18 @@ ReseauDetection DetectReseau(const Image& image, const MasterGrid& grid, const R
     start.arm_length_px = grid.mark.arm_length_um * scale_px_per_mm / 1000.0;
     RefineOne(image, start, options, max_shift_px, top.polarity, &result.points[g], &result.fits[g]);
   });
-  // Faint crosses again with the plate's shape held: a free shape the pixels cannot
-  // pin makes the linearised sigma optimistic (1.2 x at a matched-filter SNR of 18).
+  // Faint crosses (measured, or missing for low contrast) again with the plate's
+  // shape held: a free shape their pixels cannot pin makes the sigma optimistic.
   if (const std::optional<CrossFitStart> shape = PlateCrossShape(result.points, result.fits)) {
     tbb::parallel_for(size_t{0}, grid.points.size(), [&](size_t g) {
       const DetectedPoint& p = result.points[g];
-      const bool unfitted = p.reason == "outside_scan" || p.reason == "masked_pixels";
-      const bool pinned = p.status == PointStatus::kMeasured &&
-                          result.fits[g].width_relative_sigma < kShapePinnedRelativeSigma;
-      if (unfitted || pinned) return;
+      const bool faint = (p.status == PointStatus::kMeasured && MatchedFilterSnr(result.fits[g]) < kFreeShapeMinSnr) ||
+                         p.reason == "low_contrast";
+      if (!faint) return;
       CrossFitStart start = starts[g];
       start.line_width_px = shape->line_width_px;
       start.arm_length_px = shape->arm_length_px;
       start.blur_sigma_px = shape->blur_sigma_px;
-      start.gain_dn = shape->gain_dn;
       start.shape_known = true;
       RefineOne(image, start, options, max_shift_px, top.polarity, &result.points[g], &result.fits[g]);
     });

@@ -254,13 +254,16 @@ void MeasureSegment(const SweepMoments& m, const std::vector<FitPixel>& pixels, 
     }
   }
   const star_internal::FittedSegment& g = fit.segment;
+  // A fit whose centre left its window found no image of its own there (seen at 1e8 px).
+  const bool inside = g.x_px >= window.x0 && g.x_px <= window.x1 && g.y_px >= window.y0 && g.y_px <= window.y1;
   const double ratio = g.sigma_px / psf_sigma;
   if (ratio > o.max_dash_width_ratio || ratio < o.min_fwhm_ratio) {
-    result->push_back(Defect(g.x_px, g.y_px, "shape"));
+    if (inside) result->push_back(Defect(g.x_px, g.y_px, "shape"));
     return;
   }
   if (g.length_px > (1.0 + o.dash_length_tolerance) * o.max_dash_length_px + o.psf_fwhm_px) {
-    DetectedStar line = Defect(g.x_px, g.y_px, "line");
+    DetectedStar line = inside ? Defect(g.x_px, g.y_px, "line")
+                               : Defect(0.5 * (window.x0 + window.x1), 0.5 * (window.y0 + window.y1), "line");
     // Its extent (a trail linker asks what it may hide), at most the fit window's: a fit of a component
     // unlike a segment may run its length away (88636 px seen on a 6012 px scan).
     line.length_px = std::min(g.length_px, std::hypot(window.x1 - window.x0, window.y1 - window.y0));
@@ -380,11 +383,12 @@ void ReportPointFits(const GaussianFitResult& fit, bool blended, const PointFitP
     if (g.flux_dn <= 0 || g.flux_dn < o.min_snr * g.sigma_flux_dn) continue;
     // Width: only the implausible here; the test against the plate's width model at the image's
     // place follows once every band is measured (JudgeShapes).
+    // A fit that left its window found no image of its own there (it may have run off to 1e8 px).
+    if (g.x_px < at.window.x0 || g.x_px > at.window.x1 || g.y_px < at.window.y0 || g.y_px > at.window.y1) continue;
     if (!WidthPlausible(o, g.sigma_px / at.start_sigma)) {
       result->push_back(Defect(g.x_px, g.y_px, "shape"));
       continue;
     }
-    if (g.x_px < at.window.x0 || g.x_px > at.window.x1 || g.y_px < at.window.y0 || g.y_px > at.window.y1) continue;
     DetectedStar d = MeasuredImage(g.x_px, g.y_px, g.sigma_x_px, g.sigma_y_px, g.correlation_xy, g.flux_dn,
                                    g.sigma_flux_dn, at.mesh->LevelAt(g.x_px, g.y_px - at.y0_abs) + at.sign * fit.offset_dn);
     d.peak_dn = g.flux_dn / (2.0 * M_PI * g.sigma_px * g.sigma_px);
@@ -658,7 +662,16 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, const StarWidthMod
   }
 }
 
-void Finish(std::vector<DetectedStar>* stars) {
+// Ids in reading order; a measured image whose formal sigma is no sigma (zero, not finite, or above
+// max_sigma_px: an SNR below 1, a degenerate joint fit) is no measurement: rejected, poor_fit.
+void Finish(double max_sigma_px, std::vector<DetectedStar>* stars) {
+  for (DetectedStar& d : *stars) {
+    const DetectedPoint& p = d.point;
+    const bool usable = p.sigma_x_px > 0 && p.sigma_y_px > 0 && p.sigma_x_px < max_sigma_px && p.sigma_y_px < max_sigma_px;
+    if (p.status != PointStatus::kMeasured || usable) continue;
+    d.point.status = PointStatus::kRejected, d.point.reason = "poor_fit";
+    d.point.sigma_x_px = d.point.sigma_y_px = d.point.correlation_xy = 0.0;
+  }
   std::sort(stars->begin(), stars->end(), [](const DetectedStar& a, const DetectedStar& b) {
     return a.point.position_px.y_px != b.point.position_px.y_px ? a.point.position_px.y_px < b.point.position_px.y_px
                                                                 : a.point.position_px.x_px < b.point.position_px.x_px;
@@ -720,7 +733,7 @@ std::vector<DetectedStar> DetectStarsInBuffer(const float* values_dn, long width
   const StarWidthModel start = StartWidthModel(width_px, height_px, options.psf_fwhm_px / kFwhmPerSigma);
   ProcessBand(b, options, start, &stars, stats);
   JudgeShapes(options, start, &stars, stats);
-  Finish(&stars);
+  Finish(3.0 * options.psf_fwhm_px, &stars);  // 3 x: the start width may be 2 x off the images'
   return stars;
 }
 
@@ -757,7 +770,7 @@ std::vector<DetectedStar> DetectStars(const Image& image, const StarDetectorOpti
     if (options.max_dash_length_px == 0) width_model = SettleStarWidthModel(stars, width_model, 1);
   }
   JudgeShapes(options, width_model, &stars, stats);
-  Finish(&stars);
+  Finish(3.0 * options.psf_fwhm_px, &stars);  // 3 x: the start width may be 2 x off the images'
   return stars;
 }
 

@@ -59,8 +59,10 @@ MeasurementFile ToMeasurementFile(const Detections& detections, const std::strin
     if (p.status != PointStatus::kMissing) {
       row.x_px = p.position_px.x_px;
       row.y_px = p.position_px.y_px;
-      row.sigma_x_px = p.sigma_x_px;
-      row.sigma_y_px = p.sigma_y_px;
+      if (p.sigma_x_px > 0.0 && p.sigma_y_px > 0.0) {  // a rejected point may have a place but no sigma
+        row.sigma_x_px = p.sigma_x_px;
+        row.sigma_y_px = p.sigma_y_px;
+      }
     }
     if (!p.reason.empty()) row.flags.push_back(std::string(PointStatusName(p.status)) + ":" + p.reason);
     file.points.push_back(row);

@@ -29,7 +29,13 @@ struct CrossFitOptions {
   double min_blur_sigma_px = 0.15; // px; lower bound of the fitted blur (keeps the profile smooth)
   double outlier_threshold = 4.0;  // pixels with |residual| above this many sigma are dropped in the final fit
   double min_outlier_contrast = 0.05;  // a pixel is never an outlier if it deviates by less than this share of the contrast
-  double max_outlier_fraction = 0.08;  // more dropped pixels than this: the cross is rejected as a defect
+  // Around every dropped pixel, pixels within this many blur sigmas of the cross
+  // (rounded to whole pixels) are dropped too: a foreign image's blurred edge.
+  double foreign_margin_blurs = 3.0;
+  // The pixels kept must hold at least this share of the centre's information
+  // (1 / variance, the worse axis) that the whole region would: below it too
+  // little of the cross is left, and the caller rejects it as a defect.
+  double min_information_kept = 0.2;
   // Masked pixels (image.h) are left out of the fit; they cost precision (the
   // sigma is the used pixels') but bias nothing. Beyond this share of the fit
   // region the cross's shape is not held by its own pixels: not fitted.
@@ -48,7 +54,6 @@ struct CrossFitStart {
   // own crosses' shape) and held: only the place, rotation, contrast and
   // background are fitted. For faint crosses, whose pixels cannot pin the shape.
   bool shape_known = false;
-  double gain_dn = 0.0;        // contrast to start from (negative: dark); 0: estimated from the pixels
 };
 
 struct CrossFitResult {
@@ -69,11 +74,8 @@ struct CrossFitResult {
   // background free (scaled by sigma0): |gain_dn| / gain_sigma_dn is the cross's
   // matched-filter SNR, the noise limit of telling it from background.
   double gain_sigma_dn = 0.0;
-  // Formal sigma of the line widths over their value (the worse of the two; 0
-  // when the shape was held): above about 0.1 the cross's pixels do not pin its
-  // shape, and the linearised sigmas of a free-shape fit are optimistic.
-  double width_relative_sigma = 0.0;
-  double outlier_fraction = 0.0;    // share of pixels dropped as outliers
+  double outlier_fraction = 0.0;    // share of pixels dropped as foreign (outliers and their margins)
+  double information_kept = 1.0;    // share of the centre's information in the pixels kept (see min_information_kept)
   int pixels_used = 0;
   int pixels_masked = 0;            // masked pixels in the fit region, left out
   double masked_fraction = 0.0;     // their share of the fit region

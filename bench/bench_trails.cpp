@@ -183,6 +183,9 @@ void ScoreCrosses(const std::vector<TruthCross>& crosses, const MeasurementFile&
     const double zx = (*p.x_px - t.x_px) / *p.sigma_x_px, zy = (*p.y_px - t.y_px) / *p.sigma_y_px;
     ++count;
     within += std::abs(zx) <= 3.0 && std::abs(zy) <= 3.0;
+    if (std::abs(zx) > 3.0 || std::abs(zy) > 3.0)
+      std::printf("  cross %s beyond 3 sigma: error (%.3f, %.3f) px, sigma (%.3f, %.3f) px\n", p.id.c_str(),
+                  *p.x_px - t.x_px, *p.y_px - t.y_px, *p.sigma_x_px, *p.sigma_y_px);
     norm2 += zx * zx + zy * zy;
     worst = std::max({worst, std::abs(zx), std::abs(zy)});
   }

@@ -328,8 +328,10 @@ ReseauDetection DetectReseau(const Image& image, const MasterGrid& grid, const R
   if (const std::optional<CrossFitStart> shape = PlateCrossShape(result.points, result.fits)) {
     tbb::parallel_for(size_t{0}, grid.points.size(), [&](size_t g) {
       const DetectedPoint& p = result.points[g];
-      const bool faint = (p.status == PointStatus::kMeasured && MatchedFilterSnr(result.fits[g]) < kFreeShapeMinSnr) ||
-                         p.reason == "low_contrast";
+      const CrossFitResult& f = result.fits[g];
+      // Missing with a converged fit: too faint (low_contrast).
+      const bool faint = f.converged && (p.status == PointStatus::kMissing ||
+                                         (p.status == PointStatus::kMeasured && MatchedFilterSnr(f) < kFreeShapeMinSnr));
       if (!faint) return;
       CrossFitStart start = starts[g];
       start.line_width_px = shape->line_width_px;

@@ -8,6 +8,7 @@
 // the same image for the throughput comparison.
 //
 //   bench_trails [--pixel-um 20] [--mag-limit 8] [--rows N] [--min-snr 20] [--keep DIR [--reuse]] [--no-sep]
+//                [--crosses-only]   (detect and score the reseau crosses only, in seconds)
 //   --rows N renders only N rows through the middle of the plate (trails cut by
 //   the band's edges are not counted); default the whole plate.
 #include <malloc.h>
@@ -203,7 +204,7 @@ int main(int argc, char** argv) {
   double isolation_fwhm = 3.0;
   long band_rows = 0;
   std::string keep, lost_file;  // --lost FILE: every measurable dot not right, and every image of its star (time, SNR, length, measurable, right: for debugging)
-  bool sep = true, reuse = false;
+  bool sep = true, reuse = false, crosses_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -222,11 +223,12 @@ int main(int argc, char** argv) {
     else if (a == "--grain-dn") grain_dn = std::stod(next());
     else if (a == "--isolation-fwhm") isolation_fwhm = std::stod(next());
     else if (a == "--keep") keep = next();
+    else if (a == "--crosses-only") crosses_only = true;
     else if (a == "--no-sep") sep = false;
     else if (a == "--reuse") reuse = true;
     else if (a == "--lost") lost_file = next();
     else {
-      std::fprintf(stderr, "usage: bench_trails [--pixel-um 20] [--mag-limit 8] [--rows N] [--min-snr 20] [--keep DIR [--reuse]] [--no-sep] [--lost FILE]\n");
+      std::fprintf(stderr, "usage: bench_trails [--pixel-um 20] [--mag-limit 8] [--rows N] [--min-snr 20] [--keep DIR [--reuse]] [--no-sep] [--lost FILE] [--crosses-only]\n");
       return 2;
     }
   }
@@ -360,14 +362,19 @@ int main(int argc, char** argv) {
   char fwhm_px[32];
   std::snprintf(fwhm_px, sizeof fwhm_px, "%.2f", fwhm_px_value);
   const std::string out = dir + "/out";
-  const ToolRun run = RunProcess({PLATEMETER_BIN, "detect", scan, "--camera", "orbigon", "--orientation", "180m",
-                                  "--stars", "--star-fwhm-px", fwhm_px, "--trails-start-utc", kStartUtc, "-o", out},
-                                 dir + "/detect.log");
+  std::vector<std::string> detect_args = {PLATEMETER_BIN, "detect", scan, "--camera", "orbigon", "--orientation", "180m", "-o", out};
+  if (!crosses_only) detect_args.insert(detect_args.end(), {"--stars", "--star-fwhm-px", fwhm_px, "--trails-start-utc", kStartUtc});
+  const ToolRun run = RunProcess(detect_args, dir + "/detect.log");
   if (!run.ok) {
     std::fprintf(stderr, "bench_trails: platemeter detect failed, see %s/detect.log\n", dir.c_str());
     return 1;
   }
   const MeasurementFile measured = ReadMeasurementFile(out + "/" + scan_name + ".measurements.csv");
+  if (crosses_only) {  // the reseau crosses do not depend on the star images' detection
+    ScoreCrosses(truth_crosses, measured);
+    if (keep.empty()) fs::remove_all(dir);
+    return 0;
+  }
 
   // ---- score
   const TruthIndex index(truth_images, 4.0);

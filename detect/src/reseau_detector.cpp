@@ -50,6 +50,21 @@ void RefineOne(const Image& image, const CrossFitStart& start, const ReseauDetec
     return;
   }
   *fit = FitCross(image.ReadWindow(window_rect), start, options.fit);
+  // The fit's pixels are the band around the start's arms, wide enough for a
+  // start a line width off: a centre found farther away (a candidate that a star
+  // image pulled off) is fitted again on the band around itself, so that no
+  // arm's tip or background side is cut.
+  const double moved_px = std::hypot(fit->centre_px.x_px - start.centre_px.x_px, fit->centre_px.y_px - start.centre_px.y_px);
+  if (fit->converged && moved_px > start.line_width_px && moved_px <= max_shift_px) {
+    CrossFitStart again = start;
+    again.centre_px = fit->centre_px;
+    const PixelRect again_wanted = CrossFitWindow(again, options.fit);
+    const PixelRect again_rect = image.Clip(again_wanted);
+    if (again_rect.width_px == again_wanted.width_px && again_rect.height_px == again_wanted.height_px) {
+      CrossFitResult refit = FitCross(image.ReadWindow(again_rect), again, options.fit);
+      if (refit.converged) *fit = std::move(refit);
+    }
+  }
   if (fit->too_many_masked) {
     point->status = PointStatus::kMissing;  // the scan holds no values there
     point->reason = "masked_pixels";
@@ -321,6 +336,8 @@ ReseauDetection DetectReseau(const Image& image, const MasterGrid& grid, const R
     start.rotation_rad = arm_rotation_rad;
     start.line_width_px = grid.mark.line_width_um * scale_px_per_mm / 1000.0;
     start.arm_length_px = grid.mark.arm_length_um * scale_px_per_mm / 1000.0;
+    start.polarity = top.polarity;
+    start.full_scale_dn = image.info().full_scale_dn;
     RefineOne(image, start, options, max_shift_px, top.polarity, &result.points[g], &result.fits[g]);
   });
   // Faint crosses (measured, or missing for low contrast) again with the plate's

@@ -36,6 +36,14 @@ struct CrossFitOptions {
   // (1 / variance, the worse axis) that the whole region would: below it too
   // little of the cross is left, and the caller rejects it as a defect.
   double min_information_kept = 0.2;
+  // Foreign pixels (star images, a trail's dots, dust specks) are fitted with the
+  // cross as pixel-integrated Gaussian images, one started at each peak of the
+  // outliers' residuals at least min_foreign_image_separation_px apart, at most
+  // max_foreign_images, instead of being dropped: a star image on an arm then
+  // costs only the information its own parameters take. What the joint model
+  // still misses (scratches, saturated cores) is dropped as above.
+  int max_foreign_images = 20;
+  double min_foreign_image_separation_px = 3.0;
   // Masked pixels (image.h) are left out of the fit; they cost precision (the
   // sigma is the used pixels') but bias nothing. Beyond this share of the fit
   // region the cross's shape is not held by its own pixels: not fitted.
@@ -54,6 +62,15 @@ struct CrossFitStart {
   // own crosses' shape) and held: only the place, rotation, contrast and
   // background are fitted. For faint crosses, whose pixels cannot pin the shape.
   bool shape_known = false;
+  // +1: a bright cross, -1: a dark one, 0: unknown (taken from the pixels). A
+  // known polarity keeps the gain's sign, and pixels beyond the background on the
+  // other side (star images on a plate whose crosses are the other way) are left
+  // out of the first fit.
+  int polarity = 0;
+  // The scan's full scale (ImageInfo::full_scale_dn), 0 if unknown. With the
+  // polarity known, pixels a foreign image drove to the clip level on the side
+  // away from the cross (0, or full scale) are never fitted.
+  double full_scale_dn = 0.0;
 };
 
 struct CrossFitResult {
@@ -76,6 +93,7 @@ struct CrossFitResult {
   double gain_sigma_dn = 0.0;
   double outlier_fraction = 0.0;    // share of pixels dropped as foreign (outliers and their margins)
   double information_kept = 1.0;    // share of the centre's information in the pixels kept (see min_information_kept)
+  int foreign_images = 0;           // foreign images fitted with the cross (see max_foreign_images)
   int pixels_used = 0;
   int pixels_masked = 0;            // masked pixels in the fit region, left out
   double masked_fraction = 0.0;     // their share of the fit region

@@ -1,0 +1,110 @@
+#include "cross_foreign.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "median.h"
+
+namespace platemeter::internal {
+
+std::vector<char> FlagOutliers(const std::vector<CrossSample>& samples, const std::vector<char>& dropped,
+                               const std::vector<double>& p, int images, double xc, double yc, double threshold,
+                               double min_contrast) {
+  std::vector<double> abs_residuals(samples.size()), kept_residuals;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    abs_residuals[i] = std::abs(SceneModel(p.data(), images, xc, yc, samples[i], nullptr) - samples[i].value_dn);
+    if (!dropped[i]) kept_residuals.push_back(abs_residuals[i]);
+  }
+  const double robust_sigma = 1.4826 * detect_internal::Median(kept_residuals);
+  // The floor keeps a nearly noise-free scan from losing pixels to tiny model
+  // differences; real defects deviate by a large part of the contrast.
+  const double limit = std::max(threshold * robust_sigma, min_contrast * std::abs(p[kGain]));
+  std::vector<char> flags(samples.size(), 0);
+  for (size_t i = 0; i < samples.size(); ++i) flags[i] = abs_residuals[i] > limit;
+  return flags;
+}
+
+std::vector<char> FlagOppositeSide(const std::vector<CrossSample>& samples, int polarity, double threshold) {
+  std::vector<char> flags(samples.size(), 0);
+  if (polarity == 0 || samples.empty()) return flags;
+  std::vector<double> values(samples.size());
+  for (size_t i = 0; i < samples.size(); ++i) values[i] = samples[i].value_dn;
+  const double background = detect_internal::Median(values);
+  for (double& v : values) v = std::abs(v - background);
+  const double noise = 1.4826 * detect_internal::Median(values);
+  for (size_t i = 0; i < samples.size(); ++i)
+    flags[i] = polarity * (samples[i].value_dn - background) < -threshold * noise;
+  return flags;
+}
+
+namespace {
+
+// The window's pixel grid, one cell per pixel, for neighbourhood operations on samples.
+class SampleGrid {
+ public:
+  explicit SampleGrid(const PixelRect& rect)
+      : rect_(rect), cells_(static_cast<size_t>(rect.width_px * rect.height_px), -1) {}
+  int& at(long col, long row) {
+    return cells_[static_cast<size_t>((row - rect_.y0_px) * rect_.width_px + (col - rect_.x0_px))];
+  }
+  bool inside(long col, long row) const {
+    return col >= rect_.x0_px && col < rect_.x_end_px() && row >= rect_.y0_px && row < rect_.y_end_px();
+  }
+  static long Col(const CrossSample& s) { return static_cast<long>(s.x_px); }
+  static long Row(const CrossSample& s) { return static_cast<long>(s.y_px); }
+
+ private:
+  PixelRect rect_;
+  std::vector<int> cells_;
+};
+
+}  // namespace
+
+std::vector<char> GrowFlags(const std::vector<CrossSample>& samples, const std::vector<char>& flags,
+                            const PixelRect& rect, long margin_px) {
+  if (margin_px <= 0) return flags;
+  SampleGrid grid(rect);
+  for (size_t i = 0; i < samples.size(); ++i) {
+    if (!flags[i]) continue;
+    const long col = SampleGrid::Col(samples[i]), row = SampleGrid::Row(samples[i]);
+    for (long r = row - margin_px; r <= row + margin_px; ++r)
+      for (long c = col - margin_px; c <= col + margin_px; ++c)
+        if (grid.inside(c, r)) grid.at(c, r) = 1;
+  }
+  std::vector<char> grown(samples.size(), 0);
+  for (size_t i = 0; i < samples.size(); ++i) grown[i] = grid.at(SampleGrid::Col(samples[i]), SampleGrid::Row(samples[i])) == 1;
+  return grown;
+}
+
+std::vector<CrossSample> Kept(const std::vector<CrossSample>& samples, const std::vector<char>& dropped) {
+  std::vector<CrossSample> kept;
+  kept.reserve(samples.size());
+  for (size_t i = 0; i < samples.size(); ++i)
+    if (!dropped[i]) kept.push_back(samples[i]);
+  return kept;
+}
+
+std::vector<ForeignImageStart> ForeignImageStarts(const std::vector<CrossSample>& samples,
+                                                  const std::vector<char>& flags, const std::vector<double>& residuals,
+                                                  double min_separation_px, int max_images) {
+  // Greedy non-maximum suppression: the flagged samples by |value - model|,
+  // each a new image unless one already started lies within the separation.
+  std::vector<size_t> order;
+  for (size_t i = 0; i < samples.size(); ++i)
+    if (flags[i]) order.push_back(i);
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return std::abs(residuals[a]) > std::abs(residuals[b]); });
+  std::vector<ForeignImageStart> starts;
+  constexpr double kStartSigmaPx = 1.0;
+  const double flux_per_peak = 2.0 * std::numbers::pi * kStartSigmaPx * kStartSigmaPx;
+  for (size_t i : order) {
+    if (starts.size() >= static_cast<size_t>(max_images)) break;
+    const bool near = std::any_of(starts.begin(), starts.end(), [&](const ForeignImageStart& s) {
+      return std::max(std::abs(s.x_px - samples[i].x_px), std::abs(s.y_px - samples[i].y_px)) < min_separation_px;
+    });
+    if (!near) starts.push_back({samples[i].x_px, samples[i].y_px, -residuals[i] * flux_per_peak, kStartSigmaPx});
+  }
+  return starts;
+}
+
+}  // namespace platemeter::internal

@@ -65,13 +65,16 @@ int RunDetector(const std::string& which, const std::string& path, const std::st
   const Image image = Image::Open(path);
   std::vector<Detection> found;
   double detect_s = 0;
+  long rows = 0;  // what the detector writes: ours also rejected rows, SEP its catalogue
   if (which == "ours") {
     StarDetectorOptions o;
     o.psf_fwhm_px = fwhm_px;
     const auto t1 = std::chrono::steady_clock::now();
-    for (const DetectedStar& s : DetectStars(image, o))
+    for (const DetectedStar& s : DetectStars(image, o)) {
+      ++rows;
       if (s.point.status == PointStatus::kMeasured)
         found.push_back({s.point.position_px.x_px, s.point.position_px.y_px, s.flags});
+    }
     detect_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   } else {
     const long w = image.info().width_px, h = image.info().height_px;
@@ -115,7 +118,8 @@ int RunDetector(const std::string& which, const std::string& path, const std::st
   const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::FILE* f = std::fopen(out.c_str(), "w");
   if (!f) return 3;
-  std::fprintf(f, "%.4f %.4f\n", total_s, detect_s);
+  if (which != "ours") rows = static_cast<long>(found.size());
+  std::fprintf(f, "%.4f %.4f %ld\n", total_s, detect_s, rows);
   for (const Detection& d : found) std::fprintf(f, "%.5f %.5f %u\n", d.x, d.y, d.flags);
   std::fclose(f);
   return 0;
@@ -124,6 +128,7 @@ int RunDetector(const std::string& which, const std::string& path, const std::st
 struct Run {
   bool ok = false;
   double wall_s = 0, total_s = 0, detect_s = 0, peak_rss_mb = 0;
+  long rows = 0;
   std::vector<Detection> found;
 };
 
@@ -147,7 +152,7 @@ Run RunChild(const std::string& self, const std::string& which, const std::strin
   run.peak_rss_mb = usage.ru_maxrss / 1024.0;
   run.ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
   std::ifstream in(out);
-  in >> run.total_s >> run.detect_s;
+  in >> run.total_s >> run.detect_s >> run.rows;
   Detection d;
   while (in >> d.x >> d.y >> d.flags) run.found.push_back(d);
   return run;
@@ -201,8 +206,8 @@ const double kWidthBins[] = {0, 1.3, 1.5, 1.7, 1.9, 1e9};  // true sigma, px
 
 void Score(const char* name, const Run& run, const std::vector<TruthStar>& truth,
            const std::vector<std::pair<double, double>>& marks, long pixels) {
-  std::printf("\n== %s: %zu detections, %.2f s total (%.2f s detection), %.1f Mpixel/s, peak RSS %.0f MB%s\n", name,
-              run.found.size(), run.total_s, run.detect_s, pixels / 1e6 / run.total_s, run.peak_rss_mb,
+  std::printf("\n== %s: %zu detections (%ld rows written), %.2f s total (%.2f s detection), %.1f Mpixel/s, peak RSS %.0f MB%s\n",
+              name, run.found.size(), run.rows, run.total_s, run.detect_s, pixels / 1e6 / run.total_s, run.peak_rss_mb,
               run.ok ? "" : "  (FAILED)");
   auto nearest = [&](double x, double y, double r) {
     int best = -1;

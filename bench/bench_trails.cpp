@@ -585,7 +585,8 @@ int main(int argc, char** argv) {
       const ToolRun r = RunProcess({bench_stars, "--detect", which, scan, result, fwhm_px}, dir + "/" + which + ".log");
       std::ifstream in(result);
       double total_s = 0, detect_s = 0;
-      in >> total_s >> detect_s;
+      long rows_written = 0;  // bench_stars' child: the header holds the rows the detector wrote
+      in >> total_s >> detect_s >> rows_written;
       long n = 0;
       for (double x, y, f; in >> x >> y >> f;) ++n;
       std::printf("%s star extraction on the same image: %ld sources, %.1f s (%.1f Mpx/s), peak RSS %.0f MB%s\n",

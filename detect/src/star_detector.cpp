@@ -7,6 +7,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <numbers>
 #include <set>
@@ -498,6 +499,13 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, const StarWidthMod
     components.insert(components.end(), whole.begin(), whole.end());
   }
   const int window_reach = dash_mode ? std::max(40, static_cast<int>(std::ceil(0.5 * dash_box_px + 3.0 * psf_sigma))) : 40;
+  // Point mode: below the level that pure noise, filtered, reaches once in ten scans of this size, a
+  // peak cannot be told from noise: not fitted, no row (a star that faint has no position worth one).
+  constexpr double kNoisePeaksPerScan = 0.1;
+  const double noise_peak_level =
+      dash_mode ? 0.0
+                : star_internal::NoisePeakLevel(static_cast<double>(b.width) * b.image_height, psf_sigma, kNoisePeaksPerScan);
+  std::atomic<long> noise_peaks{0};
 
   std::vector<std::vector<DetectedStar>> found(components.size());
   tbb::parallel_for(size_t{0}, components.size(), [&](size_t ci) {
@@ -512,6 +520,10 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, const StarWidthMod
         if (labels.at<int>(y, x) == l && filtered.at<float>(y, x) > best) best = filtered.at<float>(y, x), px = x, py = y;
     const long peak_y_abs = b.y0_abs + py;
     if (peak_y_abs < b.keep_y0 || peak_y_abs >= b.keep_y1) return;
+    if (best < noise_peak_level * noise_gain * mesh.SigmaAt(px, py)) {
+      ++noise_peaks;
+      return;
+    }
     std::vector<DetectedStar>& result = found[ci];
     // Shape tests on the component: lines (scratches; dashes and trails unless in trail mode), crosses,
     // masked marks.
@@ -654,7 +666,8 @@ void ProcessBand(const Band& b, const StarDetectorOptions& o, const StarWidthMod
       if (stats && d.point.status == PointStatus::kRejected) ++stats->defects;
       out->push_back(std::move(d));
     }
-  if (stats) stats->components += n - 1, ++stats->bands;
+  if (stats) stats->components += n - 1, stats->noise_peaks += noise_peaks, ++stats->bands;
+  if (stats) stats->noise_peak_level_sigma = noise_peak_level;
   if (stats && stats->noise_sigma_dn == 0 && !mesh.sigma_dn.empty()) {
     std::vector<float> s = mesh.sigma_dn;
     std::nth_element(s.begin(), s.begin() + s.size() / 2, s.end());

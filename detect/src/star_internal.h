@@ -23,6 +23,15 @@ struct BackgroundMesh {
   void LevelRow(long y_px, long width_px, float* out) const;
 };
 
+// Pure noise filtered by a Gaussian of sigma filter_sigma_px is a smooth random
+// field; over area_px2 it has, above u of its own sigmas, on average
+//   N(u) = area_px2 * lambda u exp(-u^2 / 2) / (2 pi)^(3/2),  lambda = 1 / (2 filter_sigma_px^2)
+// peaks (the expected Euler characteristic of the excursion set; Adler 1981).
+double ExpectedNoisePeaks(double area_px2, double filter_sigma_px, double level_sigma);
+// The level (filtered noise sigmas) that pure noise exceeds expected_peaks times
+// over the area: a peak below it cannot be told from noise.
+double NoisePeakLevel(double area_px2, double filter_sigma_px, double expected_peaks);
+
 // Sigma-clipped mode and sigma per cell (SExtractor's estimator), then a 3x3
 // median over the mesh. Pixels at or outside [low_dn, high_dn] are ignored.
 // Coordinates are relative to the buffer's first pixel.

@@ -49,9 +49,12 @@ struct Layout {
   }
 };
 
-// Parameters: offset, then per star x, y, flux, sigma (x, y relative to the reference point).
+// Parameters: offset, then per star x, y, flux, sigma (x, y relative to the reference point). The
+// jacobian, when not null, is column-major with one row per pixel (TinySolver's and Eigen's layout).
 void Model(const std::vector<FitPixel>& pixels, const Layout& layout, const double* p, int stars, double rx, double ry,
-           double* residuals, Eigen::MatrixXd* jacobian) {
+           double* residuals, double* jacobian) {
+  const size_t rows = pixels.size();
+  auto jac = [&](size_t i, int column) -> double& { return jacobian[static_cast<size_t>(column) * rows + i]; };
   std::vector<Profile> px(layout.width * stars), py(layout.height * stars);
   for (int k = 0; k < stars; ++k) {
     const double* q = p + 1 + 4 * k;
@@ -60,17 +63,17 @@ void Model(const std::vector<FitPixel>& pixels, const Layout& layout, const doub
   }
   for (size_t i = 0; i < pixels.size(); ++i) {
     double m = p[0];
-    if (jacobian) (*jacobian)(i, 0) = 1.0;
+    if (jacobian) jac(i, 0) = 1.0;
     for (int k = 0; k < stars; ++k) {
       const double* q = p + 1 + 4 * k;
       const Profile& ux = px[k * layout.width + layout.col[i]];
       const Profile& uy = py[k * layout.height + layout.row[i]];
       m += q[2] * ux.g * uy.g;
       if (jacobian) {
-        (*jacobian)(i, 1 + 4 * k) = q[2] * ux.dc * uy.g;
-        (*jacobian)(i, 2 + 4 * k) = q[2] * ux.g * uy.dc;
-        (*jacobian)(i, 3 + 4 * k) = ux.g * uy.g;
-        (*jacobian)(i, 4 + 4 * k) = q[2] * (ux.ds * uy.g + ux.g * uy.ds);
+        jac(i, 1 + 4 * k) = q[2] * ux.dc * uy.g;
+        jac(i, 2 + 4 * k) = q[2] * ux.g * uy.dc;
+        jac(i, 3 + 4 * k) = ux.g * uy.g;
+        jac(i, 4 + 4 * k) = q[2] * (ux.ds * uy.g + ux.g * uy.ds);
       }
     }
     residuals[i] = m - pixels[i].value_dn;
@@ -79,10 +82,13 @@ void Model(const std::vector<FitPixel>& pixels, const Layout& layout, const doub
 
 // The cost for ceres::TinySolver (a dense Levenberg-Marquardt for small
 // problems without the general solver's per-call overhead). The widths are
-// fitted as log(sigma), which keeps them positive.
+// fitted as log(sigma), which keeps them positive. kParams is the parameter count when known at
+// compile time (one star: 5, a pair: 9): TinySolver's small matrices are then fixed-size, which
+// spares the general matrix product most of a star's fit time went to.
+template <int kParams>
 struct GaussiansCost {
   using Scalar = double;
-  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = Eigen::Dynamic };
+  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = kParams };
   const std::vector<FitPixel>& pixels;
   Layout layout;
   int stars;
@@ -97,13 +103,27 @@ struct GaussiansCost {
       Model(pixels, layout, p.data(), stars, rx, ry, residuals, nullptr);
       return true;
     }
-    Eigen::MatrixXd j(pixels.size(), NumParameters());
-    Model(pixels, layout, p.data(), stars, rx, ry, residuals, &j);
-    for (int k = 0; k < stars; ++k) j.col(4 + 4 * k) *= p[4 + 4 * k];
-    Eigen::Map<Eigen::MatrixXd>(jacobian, pixels.size(), NumParameters()) = j;
+    Model(pixels, layout, p.data(), stars, rx, ry, residuals, jacobian);
+    for (int k = 0; k < stars; ++k)  // d/d(log sigma) = sigma d/d(sigma)
+      for (size_t i = 0; i < pixels.size(); ++i) jacobian[static_cast<size_t>(4 + 4 * k) * pixels.size() + i] *= p[4 + 4 * k];
     return true;
   }
 };
+
+// Levenberg-Marquardt from *x; false when it ran out of iterations.
+template <int kParams>
+bool SolveGaussians(const GaussiansCost<kParams>& cost, Eigen::VectorXd* x, double* final_cost) {
+  using Solver = ceres::TinySolver<GaussiansCost<kParams>>;
+  Solver solver;
+  solver.options.max_num_iterations = 50;
+  solver.options.function_tolerance = 1e-9;
+  solver.options.parameter_tolerance = 1e-9;
+  typename Solver::Parameters parameters = *x;
+  const auto& summary = solver.Solve(cost, &parameters);
+  *x = parameters;
+  *final_cost = summary.final_cost;
+  return summary.status != Solver::HIT_MAX_ITERATIONS;
+}
 
 }  // namespace
 
@@ -122,22 +142,27 @@ GaussianFitResult FitGaussians(const std::vector<FitPixel>& pixels, std::vector<
     p[3 + 4 * i] = stars[i].flux_dn;
     p[4 + 4 * i] = std::max(stars[i].sigma_px, min_sigma_px * 1.01);
   }
-  const GaussiansCost cost{pixels, Layout(pixels), k, rx, ry};
   Eigen::VectorXd x(np);
   for (int i = 0; i < np; ++i) x(i) = p[i];
   for (int i = 0; i < k; ++i) x(4 + 4 * i) = std::log(p[4 + 4 * i]);
-  ceres::TinySolver<GaussiansCost> solver;
-  solver.options.max_num_iterations = 50;
-  solver.options.function_tolerance = 1e-9;
-  solver.options.parameter_tolerance = 1e-9;
-  const auto& summary = solver.Solve(cost, &x);
-  if (!std::isfinite(summary.final_cost) || !x.allFinite()) return r;
-  r.converged = summary.status != decltype(solver)::HIT_MAX_ITERATIONS;
+  const Layout layout(pixels);
+  double final_cost = 0.0;
+  if (k == 1) {
+    r.converged = SolveGaussians(GaussiansCost<5>{pixels, layout, k, rx, ry}, &x, &final_cost);
+  } else if (k == 2) {
+    r.converged = SolveGaussians(GaussiansCost<9>{pixels, layout, k, rx, ry}, &x, &final_cost);
+  } else {
+    r.converged = SolveGaussians(GaussiansCost<Eigen::Dynamic>{pixels, layout, k, rx, ry}, &x, &final_cost);
+  }
+  if (!std::isfinite(final_cost) || !x.allFinite()) {
+    r.converged = false;
+    return r;
+  }
   for (int i = 0; i < np; ++i) p[i] = x(i);
   for (int i = 0; i < k; ++i) p[4 + 4 * i] = std::exp(std::clamp(x(4 + 4 * i), -3.0, 3.9));
   std::vector<double> res(pixels.size());
   Eigen::MatrixXd j(pixels.size(), np);
-  Model(pixels, Layout(pixels), p.data(), k, rx, ry, res.data(), &j);
+  Model(pixels, layout, p.data(), k, rx, ry, res.data(), j.data());
   double rss = 0;
   for (double e : res) rss += e * e;
   r.residual_sigma_dn = std::sqrt(rss / (pixels.size() - np));

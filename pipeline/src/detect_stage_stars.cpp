@@ -176,8 +176,10 @@ StageOutput RunStarStage(const DetectContext& context) {
     rejected += star.point.status == PointStatus::kRejected;
   }
   out.summary = {{"measured", measured}, {"rejected", rejected}};
-  if (!request.trails) out.summary["width_model"] = WidthModelJson(stats.width_model, options.psf_fwhm_px);
   if (!request.trails) {
+    out.summary["width_model"] = WidthModelJson(stats.width_model, options.psf_fwhm_px);
+    out.summary["noise_peaks_dropped"] = stats.noise_peaks;  // docs/stars.md step 4
+    out.summary["noise_peak_level_sigma"] = stats.noise_peak_level_sigma;
     for (const DetectedStar& star : stars) out.rows.push_back(StarRow(star));
     out.message = std::to_string(stars.size()) + " images";
     return out;

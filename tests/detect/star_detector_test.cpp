@@ -365,6 +365,35 @@ void AddWhiteNoise(std::vector<float>* v, double sigma, uint64_t state) {
   for (float& x : *v) x += static_cast<float>(sigma * std::sqrt(-2 * std::log(uniform())) * std::cos(2 * M_PI * uniform()));
 }
 
+// Pure noise: the matched-filtered noise is a smooth random field whose peaks
+// above u filtered sigmas number, over an area A, about
+//   A / (2 s^2) u exp(-u^2 / 2) / (2 pi)^(3/2)   (s: the filter's sigma)
+// (the expected Euler characteristic; computed here from the formula, not the
+// detector's code). The detector drops every peak below the level where that
+// count is 0.1 per scan before any fit: no row from noise. The components it
+// sees above the 4-sigma threshold are fewer than the formula's peaks (a peak
+// between pixels, or a component of one pixel, is not one; 43 of 159 here),
+// never more.
+TEST(StarDetectorTest, PureNoiseGivesNoRowsItsPeaksAreDroppedBeforeAnyFit) {
+  const long w = 2048, h = 2048;
+  std::vector<float> v(static_cast<size_t>(w * h), 20000.0f);
+  AddWhiteNoise(&v, 30.0, 987654321);
+  StarDetectorOptions o;  // FWHM 2.5 px, threshold 4 sigmas
+  StarDetectionStats stats;
+  const std::vector<DetectedStar> found = DetectStarsInBuffer(v.data(), w, h, 65535.0, o, &stats);
+  EXPECT_TRUE(found.empty()) << found.size() << " rows, the first at " << found[0].point.position_px.x_px << " "
+                             << found[0].point.position_px.y_px;
+  const double s = o.psf_fwhm_px / (2.0 * std::sqrt(2.0 * std::log(2.0)));
+  const double u = o.threshold_sigma;
+  const double expected = double(w) * h / (2.0 * s * s) * u * std::exp(-0.5 * u * u) / std::pow(2.0 * M_PI, 1.5);
+  EXPECT_GT(stats.noise_peaks, 20) << "no noise components to drop: the test shows nothing";
+  EXPECT_LT(stats.noise_peaks, expected) << stats.noise_peaks << " dropped, " << expected << " peaks by the formula";
+  // The level: where the formula gives 0.1 peaks over the scan.
+  const double level = stats.noise_peak_level_sigma;
+  EXPECT_NEAR(double(w) * h / (2.0 * s * s) * level * std::exp(-0.5 * level * level) / std::pow(2.0 * M_PI, 1.5), 0.1,
+              0.001);
+}
+
 // Trail mode on a bright-star image: dashes up to 18 px, single images (no pair fits).
 StarDetectorOptions TrailModeOptions(double psf_sigma_px) {
   StarDetectorOptions o;

@@ -115,6 +115,10 @@ struct StarDetectionStats {
   double noise_sigma_dn = 0.0;  // median per-cell background sigma (the image's sigma)
   long components = 0;          // connected components above the threshold
   long defects = 0;             // components or fits rejected as defects
+  // Point mode: components whose filtered peak lies below the level pure noise reaches once in ten
+  // scans of this size (in filtered noise sigmas; 0 in trail mode): dropped before any fit, no row.
+  long noise_peaks = 0;
+  double noise_peak_level_sigma = 0.0;
   StarWidthModel width_model;   // the plate's star widths (not fitted in trail mode: degree -1)
   long bands = 0;
 };

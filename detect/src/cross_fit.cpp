@@ -7,6 +7,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "centre_information.h"
 #include "cross_foreign.h"
 #include "cross_model.h"
 
@@ -14,6 +15,7 @@ namespace platemeter {
 namespace {
 
 using enum internal::CrossParam;
+using internal::CentreInformation;
 using internal::CrossCost;
 using internal::ForeignImageStart;
 using internal::kImageL11;
@@ -152,22 +154,6 @@ struct FormalErrors {
   double sigma0_sq = 0.0;
 };
 
-// Pseudo-inverse of a symmetric positive semi-definite matrix, scaled to unit
-// diagonal first so the tolerance is meaningful (width and blur of a thin line
-// are nearly interchangeable, which must not break the position's sigma);
-// zero rows (held parameters) stay zero.
-Eigen::MatrixXd ScaledPseudoInverse(const Eigen::MatrixXd& m) {
-  const Eigen::VectorXd scale = m.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
-  const Eigen::MatrixXd scaled = scale.asDiagonal() * m * scale.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
-  Eigen::VectorXd inverse_values(m.rows());
-  const double tolerance = 1e-10 * eigen.eigenvalues().maxCoeff();
-  for (Eigen::Index i = 0; i < m.rows(); ++i)
-    inverse_values[i] = eigen.eigenvalues()[i] > tolerance ? 1.0 / eigen.eigenvalues()[i] : 0.0;
-  return scale.asDiagonal() * eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose() *
-         scale.asDiagonal();
-}
-
 // The normal matrix of the fit at p over the samples (and, when rss != nullptr,
 // the residual sum of squares); a held shape's rows and columns are zero.
 Eigen::MatrixXd NormalMatrix(const std::vector<Sample>& samples, const std::vector<double>& p, int images, double xc,
@@ -188,15 +174,6 @@ Eigen::MatrixXd NormalMatrix(const std::vector<Sample>& samples, const std::vect
     }
   }
   return normal;
-}
-
-// The information on the centre: the Schur complement of the normal matrix on
-// the nuisance parameters (the cross's others and the foreign images').
-Eigen::Matrix2d CentreInformation(const Eigen::MatrixXd& normal) {
-  const Eigen::Index nuisance = normal.rows() - 2;
-  const Eigen::MatrixXd npn = normal.topRightCorner(2, nuisance);
-  const Eigen::MatrixXd nnn_pinv = ScaledPseudoInverse(normal.bottomRightCorner(nuisance, nuisance));
-  return normal.topLeftCorner<2, 2>() - npn * nnn_pinv * npn.transpose();
 }
 
 // The centre's covariance from its information, and the gain's variance.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "centre_information.h"
 #include "mark_fit_engine.h"
 #include "median.h"
 
@@ -181,9 +182,8 @@ MarkEngineResult RunMarkFit(const MarkShapeModel& model, std::vector<MarkSample>
   result.message = message;
   if (!usable) return result;
 
-  // Formal covariance of the position: Schur complement on every other
-  // parameter (pseudo-inverse after scaling to unit diagonal: width and blur of
-  // a thin line are nearly interchangeable, which must not break the position's sigma).
+  // Formal covariance of the position: the Schur complement on every other free
+  // parameter (centre_information.h).
   MarkCost cost(model, &samples, xc, yc, settings.background_terms);
   Eigen::MatrixXd jacobian;
   cost.Full(p.data(), &residuals, &jacobian);
@@ -197,19 +197,7 @@ MarkEngineResult RunMarkFit(const MarkShapeModel& model, std::vector<MarkSample>
   const int n_free = static_cast<int>(free_columns.size());
   const int dof = static_cast<int>(samples.size()) - n_free;
   const double sigma0_sq = rss / std::max(dof, 1);
-  const int nn = n_free - 2;
-  const Eigen::Matrix2d npp = normal.topLeftCorner(2, 2);
-  const Eigen::MatrixXd npn = normal.topRightCorner(2, nn);
-  const Eigen::MatrixXd nnn = normal.bottomRightCorner(nn, nn);
-  const Eigen::VectorXd scale = nnn.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
-  const Eigen::MatrixXd scaled = scale.asDiagonal() * nnn * scale.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
-  Eigen::VectorXd inverse_values(nn);
-  const double tolerance = settings.pinv_tolerance * eigen.eigenvalues().maxCoeff();
-  for (int i = 0; i < nn; ++i) inverse_values[i] = eigen.eigenvalues()[i] > tolerance ? 1.0 / eigen.eigenvalues()[i] : 0.0;
-  const Eigen::MatrixXd nnn_pinv = scale.asDiagonal() * eigen.eigenvectors() * inverse_values.asDiagonal() *
-                                   eigen.eigenvectors().transpose() * scale.asDiagonal();
-  const Eigen::Matrix2d schur = npp - npn * nnn_pinv * npn.transpose();
+  const Eigen::Matrix2d schur = CentreInformation(normal, settings.pinv_tolerance);
   const Eigen::Matrix2d covariance = sigma0_sq * schur.inverse();
   result.converged = std::isfinite(covariance(0, 0)) && std::isfinite(covariance(1, 1));
   result.cov_xx = covariance(0, 0);

@@ -38,42 +38,23 @@ std::vector<char> FlagOppositeSide(const std::vector<CrossSample>& samples, int 
   return flags;
 }
 
-namespace {
-
-// The window's pixel grid, one cell per pixel, for neighbourhood operations on samples.
-class SampleGrid {
- public:
-  explicit SampleGrid(const PixelRect& rect)
-      : rect_(rect), cells_(static_cast<size_t>(rect.width_px * rect.height_px), -1) {}
-  int& at(long col, long row) {
-    return cells_[static_cast<size_t>((row - rect_.y0_px) * rect_.width_px + (col - rect_.x0_px))];
-  }
-  bool inside(long col, long row) const {
-    return col >= rect_.x0_px && col < rect_.x_end_px() && row >= rect_.y0_px && row < rect_.y_end_px();
-  }
-  static long Col(const CrossSample& s) { return static_cast<long>(s.x_px); }
-  static long Row(const CrossSample& s) { return static_cast<long>(s.y_px); }
-
- private:
-  PixelRect rect_;
-  std::vector<int> cells_;
-};
-
-}  // namespace
-
 std::vector<char> GrowFlags(const std::vector<CrossSample>& samples, const std::vector<char>& flags,
                             const PixelRect& rect, long margin_px) {
   if (margin_px <= 0) return flags;
-  SampleGrid grid(rect);
+  std::vector<char> grid(static_cast<size_t>(rect.width_px * rect.height_px), 0);  // one cell per window pixel
+  auto cell = [&](long col, long row) -> char& {
+    return grid[static_cast<size_t>((row - rect.y0_px) * rect.width_px + (col - rect.x0_px))];
+  };
   for (size_t i = 0; i < samples.size(); ++i) {
     if (!flags[i]) continue;
-    const long col = SampleGrid::Col(samples[i]), row = SampleGrid::Row(samples[i]);
-    for (long r = row - margin_px; r <= row + margin_px; ++r)
-      for (long c = col - margin_px; c <= col + margin_px; ++c)
-        if (grid.inside(c, r)) grid.at(c, r) = 1;
+    const long col = static_cast<long>(samples[i].x_px), row = static_cast<long>(samples[i].y_px);
+    for (long r = std::max(rect.y0_px, row - margin_px); r <= std::min(rect.y_end_px() - 1, row + margin_px); ++r)
+      for (long c = std::max(rect.x0_px, col - margin_px); c <= std::min(rect.x_end_px() - 1, col + margin_px); ++c)
+        cell(c, r) = 1;
   }
   std::vector<char> grown(samples.size(), 0);
-  for (size_t i = 0; i < samples.size(); ++i) grown[i] = grid.at(SampleGrid::Col(samples[i]), SampleGrid::Row(samples[i])) == 1;
+  for (size_t i = 0; i < samples.size(); ++i)
+    grown[i] = cell(static_cast<long>(samples[i].x_px), static_cast<long>(samples[i].y_px));
   return grown;
 }
 

@@ -13,7 +13,7 @@ namespace platemeter::internal {
 // The samples whose |residual| from the model lies beyond max(threshold x the
 // robust sigma of the samples not yet dropped, min_contrast x |gain|).
 std::vector<char> FlagOutliers(const std::vector<CrossSample>& samples, const std::vector<char>& dropped,
-                               const std::vector<double>& p, int images, double xc, double yc, double threshold,
+                               const std::vector<double>& p, const SceneLayout& layout, double xc, double yc, double threshold,
                                double min_contrast);
 
 // The samples that no cross of the given polarity (+1 bright, -1 dark) on a flat
@@ -40,5 +40,21 @@ struct ForeignImageStart {
 std::vector<ForeignImageStart> ForeignImageStarts(const std::vector<CrossSample>& samples,
                                                   const std::vector<char>& flags, const std::vector<double>& residuals,
                                                   double min_separation_px, int max_images);
+
+// A missing piece's start: its arm (SceneLayout::gap_arms) and its middle and length (px).
+struct MissingPieceStart {
+  int arm;
+  double middle_px, length_px;
+};
+
+// Where an arm of the fitted cross p shows the background instead of the line: along each arm, in
+// 1 px steps from the other arm's edge to the tip, the share of the cross's signal its core pixels
+// hold (least squares of value - background on model - background); the longest run of steps
+// whose share lies within +-1/2 of zero (the line gone, nothing else there: a star on the arm goes
+// beyond the background), at least min_length_px long, starts a missing piece. The clipped
+// samples are not looked at.
+std::vector<MissingPieceStart> MissingPieceStarts(const std::vector<CrossSample>& samples,
+                                                  const std::vector<char>& clipped, const std::vector<double>& p,
+                                                  double xc, double yc, double min_length_px);
 
 }  // namespace platemeter::internal

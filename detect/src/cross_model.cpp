@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "bar_profile.h"
 
@@ -70,11 +71,47 @@ double EllipticalGaussian(double dx, double dy, double l11, double l21, double l
   return value;
 }
 
+// A missing piece's share of the model at one pixel: gain x the arm's profile
+// across x the piece's blurred extent along the arm. Its derivatives by the
+// cross's parameters are subtracted from *gradient, by its own written to d
+// (both when gradient != nullptr).
+double MissingPiece(const double* p, int arm, const double* q, const CrossSample& s, double* gradient, double* d) {
+  const double c = std::cos(p[kTheta]), sn = std::sin(p[kTheta]);
+  const double dx = s.x_px - p[kX0], dy = s.y_px - p[kY0];
+  const double u = c * dx + sn * dy, v = -sn * dx + c * dy;
+  const bool along_u = arm % 2 == 0;
+  const double side = arm < 2 ? 1.0 : -1.0;
+  const int width = along_u ? kWidthH : kWidthV;
+  const BarProfile across = EvaluateBarProfile(along_u ? v : u, p[width], p[kSigma]);
+  const BarProfile along = EvaluateBarProfile((along_u ? u : v) - side * q[kGapMiddle], q[kGapLength], p[kSigma]);
+  const double shape = across.value * along.value;
+  if (gradient) {
+    const double g = p[kGain];
+    const double d_along = across.value * along.d_t, d_across = across.d_t * along.value;
+    const double d_u = along_u ? d_along : d_across, d_v = along_u ? d_across : d_along;
+    gradient[kX0] -= g * (-c * d_u + sn * d_v);
+    gradient[kY0] -= g * (-sn * d_u - c * d_v);
+    gradient[kTheta] -= g * (v * d_u - u * d_v);
+    gradient[width] -= g * across.d_width * along.value;
+    gradient[kSigma] -= g * (across.d_sigma * along.value + across.value * along.d_sigma);
+    gradient[kGain] -= shape;
+    d[kGapMiddle] = g * side * d_along;  // the model loses g x shape; d(shape)/d(middle) = -side x d_along
+    d[kGapLength] = -g * across.value * along.d_width;
+  }
+  return p[kGain] * shape;
+}
+
 }  // namespace
 
-double SceneModel(const double* p, int images, double xc, double yc, const CrossSample& s, double* gradient) {
+double SceneModel(const double* p, const SceneLayout& layout, double xc, double yc, const CrossSample& s,
+                  double* gradient) {
   double model = CrossModel(p, xc, yc, s, gradient);
-  for (int k = 0; k < images; ++k) {
+  for (int k = 0; k < layout.gaps(); ++k) {
+    const int base = layout.FirstGapParam() + kNumGapParams * k;
+    model -= MissingPiece(p, layout.gap_arms[static_cast<size_t>(k)], p + base, s, gradient,
+                          gradient ? gradient + base : nullptr);
+  }
+  for (int k = 0; k < layout.images; ++k) {
     const double* q = p + kNumCrossParams + kNumImageParams * k;
     double* d = gradient ? gradient + kNumCrossParams + kNumImageParams * k : nullptr;
     if (d) std::fill(d, d + kNumImageParams, 0.0);
@@ -92,20 +129,20 @@ double SceneModel(const double* p, int images, double xc, double yc, const Cross
   return model;
 }
 
-CrossCost::CrossCost(const std::vector<CrossSample>* samples, int images, double xc, double yc)
-    : samples_(samples), images_(images), xc_(xc), yc_(yc) {
+CrossCost::CrossCost(const std::vector<CrossSample>* samples, SceneLayout layout, double xc, double yc)
+    : samples_(samples), layout_(std::move(layout)), xc_(xc), yc_(yc) {
   set_num_residuals(static_cast<int>(samples->size()));
-  mutable_parameter_block_sizes()->push_back(NumSceneParams(images));
+  mutable_parameter_block_sizes()->push_back(layout_.Params());
 }
 
 bool CrossCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const double* p = parameters[0];
-  const int n = NumSceneParams(images_);
+  const int n = layout_.Params();
   std::vector<double> gradient(static_cast<size_t>(n));
   const bool want_jacobian = jacobians && jacobians[0];
   for (size_t i = 0; i < samples_->size(); ++i) {
     const CrossSample& s = (*samples_)[i];
-    residuals[i] = SceneModel(p, images_, xc_, yc_, s, want_jacobian ? gradient.data() : nullptr) - s.value_dn;
+    residuals[i] = SceneModel(p, layout_, xc_, yc_, s, want_jacobian ? gradient.data() : nullptr) - s.value_dn;
     if (want_jacobian) std::copy(gradient.begin(), gradient.end(), jacobians[0] + i * n);
   }
   return true;

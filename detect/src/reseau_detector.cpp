@@ -342,6 +342,9 @@ ReseauDetection DetectReseau(const Image& image, const MasterGrid& grid, const R
   });
   // Faint crosses (measured, or missing for low contrast) again with the plate's
   // shape held: a free shape their pixels cannot pin makes the sigma optimistic.
+  // So are the defects: a damaged cross's free shape can bend to its remnants (a
+  // bar narrowed to a third of the plate's width beside its line, then taken for
+  // missing), the plate's cannot.
   if (const std::optional<CrossFitStart> shape = PlateCrossShape(result.points, result.fits)) {
     tbb::parallel_for(size_t{0}, grid.points.size(), [&](size_t g) {
       const DetectedPoint& p = result.points[g];
@@ -349,7 +352,8 @@ ReseauDetection DetectReseau(const Image& image, const MasterGrid& grid, const R
       // Missing with a converged fit: too faint (low_contrast).
       const bool faint = f.converged && (p.status == PointStatus::kMissing ||
                                          (p.status == PointStatus::kMeasured && MatchedFilterSnr(f) < kFreeShapeMinSnr));
-      if (!faint) return;
+      const bool defect = p.status == PointStatus::kRejected && p.reason == "defect";
+      if (!faint && !defect) return;
       CrossFitStart start = starts[g];
       start.line_width_px = shape->line_width_px;
       start.arm_length_px = shape->arm_length_px;

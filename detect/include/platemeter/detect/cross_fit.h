@@ -94,6 +94,7 @@ struct CrossFitResult {
   double outlier_fraction = 0.0;    // share of pixels dropped as foreign (outliers and their margins)
   double information_kept = 1.0;    // share of the centre's information in the pixels kept (see min_information_kept)
   int foreign_images = 0;           // foreign images fitted with the cross (see max_foreign_images)
+  int missing_pieces = 0;           // missing arm pieces fitted (a damaged cross: the line gone over a stretch)
   int pixels_used = 0;
   int pixels_masked = 0;            // masked pixels in the fit region, left out
   double masked_fraction = 0.0;     // their share of the fit region

@@ -26,7 +26,13 @@ double ErfBar(double t, double width, double sigma) {
   return 0.5 * (std::erf((t + width / 2) / k) - std::erf((t - width / 2) / k));
 }
 
-ImageWindow RenderBruteForce(const TrueCross& cross, PixelRect rect) {
+// A stretch of an arm without its line: arm 0 along +u, 1 +v, 2 -u, 3 -v; from..to px from the centre.
+struct ArmGap {
+  int arm;
+  double from_px, to_px;
+};
+
+ImageWindow RenderBruteForce(const TrueCross& cross, PixelRect rect, const std::vector<ArmGap>& gaps = {}) {
   static const double kNodes[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290, -0.1834346424956498,
                                    0.1834346424956498,  0.5255324099163290,  0.7966664774136267,  0.9602898564975363};
   static const double kWeights[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873, 0.3626837833783620,
@@ -45,7 +51,13 @@ ImageWindow RenderBruteForce(const TrueCross& cross, PixelRect rect) {
           const double v = -s * (x - cross.x_px) + c * (y - cross.y_px);
           const double across_u = ErfBar(v, cross.width_px, cross.blur_px), along_u = ErfBar(u, cross.length_px, cross.blur_px);
           const double across_v = ErfBar(u, cross.width_px, cross.blur_px), along_v = ErfBar(v, cross.length_px, cross.blur_px);
-          sum += 0.25 * kWeights[i] * kWeights[j] * (across_u * along_u + across_v * along_v - across_u * across_v);
+          double value = across_u * along_u + across_v * along_v - across_u * across_v;
+          for (const ArmGap& g : gaps) {
+            const double side = g.arm < 2 ? 1.0 : -1.0, middle = side * 0.5 * (g.from_px + g.to_px);
+            value -= g.arm % 2 == 0 ? across_u * ErfBar(u - middle, g.to_px - g.from_px, cross.blur_px)
+                                    : across_v * ErfBar(v - middle, g.to_px - g.from_px, cross.blur_px);
+          }
+          sum += 0.25 * kWeights[i] * kWeights[j] * value;
         }
       window.values_dn[static_cast<size_t>(row * rect.width_px + col)] =
           static_cast<float>(cross.background_dn + cross.gain_dn * sum);
@@ -264,6 +276,36 @@ TEST(CrossFit, StarImagesOnTheArmsAreFittedWithTheCross) {
   // fitting the stars costs only what their own parameters take.
   EXPECT_LT(information_dropped / trials, 0.7);
   EXPECT_GT(information / trials, information_dropped / trials + 0.15);
+}
+
+// A damaged cross (as bench_reseau's: each arm without its line over a stretch,
+// 31 % of the arms' length in all; one gap reaches the tip, one the centre) is
+// measured, not called a defect, with an honest sigma (Monte Carlo over the
+// noise). Here the foreign images fitted into its gaps keep enough of it; where
+// they do not, the missing pieces are fitted (ReseauDetector.DamagedCrosses...).
+TEST(CrossFit, ADamagedCrossIsMeasuredWithAnHonestSigma) {
+  const TrueCross cross{40.2, 39.7, 0.004, 3.0, 50.0, 0.8, -600.0, 1000.0};
+  const std::vector<ArmGap> gaps = {{0, 5.0, 14.0}, {1, 18.0, 25.5}, {2, 1.5, 8.5}, {3, 10.0, 16.0}};
+  const CrossFitStart start = StartNear(cross, 0.5, -0.6);
+  const ImageWindow clean = RenderBruteForce(cross, CrossFitWindow(start), gaps);
+  std::mt19937 random(23);
+  std::normal_distribution<float> noise(0.0f, 40.0f);
+  double squared_z = 0.0, information = 0.0;
+  const int trials = 30;
+  for (int trial = 0; trial < trials; ++trial) {
+    ImageWindow noisy = clean;
+    for (float& v : noisy.values_dn) v += noise(random);
+    const CrossFitResult fit = FitCross(noisy, start);
+    ASSERT_TRUE(fit.converged) << fit.summary;
+    EXPECT_GE(fit.information_kept, CrossFitOptions{}.min_information_kept) << fit.summary;
+    squared_z += std::pow((fit.centre_px.x_px - cross.x_px) / fit.sigma_x_px, 2) +
+                 std::pow((fit.centre_px.y_px - cross.y_px) / fit.sigma_y_px, 2);
+    information += fit.information_kept;
+  }
+  // 30 trials, both axes: the RMS scatters by about 9 %.
+  EXPECT_NEAR(std::sqrt(squared_z / (2 * trials)), 1.0, 0.25);
+  std::printf("damaged cross: RMS(error / sigma) %.3f, information kept %.2f\n", std::sqrt(squared_z / (2 * trials)),
+              information / trials);
 }
 
 }  // namespace

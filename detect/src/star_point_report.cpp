@@ -222,15 +222,17 @@ void ReportPointFits(const GaussianFitResult& fit, bool blended, const std::vect
   }
 }
 
-
 void ResolvePendingPairs(const StarDetectorOptions& o, const StarWidthModel& model, std::vector<PendingPair>* pending,
                          std::vector<DetectedStar>* stars, StarDetectionStats* stats) {
   if (pending->empty()) return;
   std::vector<char> provisional(stars->size(), 0);
   for (const PendingPair& p : *pending) std::fill_n(provisional.begin() + p.first_row, p.row_count, 1);
   size_t kept = 0;
-  for (size_t i = 0; i < stars->size(); ++i)
-    if (!provisional[i]) (*stars)[kept++] = std::move((*stars)[i]);
+  for (size_t i = 0; i < stars->size(); ++i) {
+    if (provisional[i]) continue;
+    if (kept != i) (*stars)[kept] = std::move((*stars)[i]);  // no self-move: its strings would be left unspecified
+    ++kept;
+  }
   stars->resize(kept);
   std::vector<std::vector<DetectedStar>> found(pending->size());
   tbb::parallel_for(size_t{0}, pending->size(), [&](size_t i) {

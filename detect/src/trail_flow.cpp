@@ -127,7 +127,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   const DetectedStar& d = c.images[dash];
   // (point images too: where a dash is at most two FWHM long, Compatible takes them; measured lengths needed)
   const bool blended = (d.flags & kStarBlended) != 0;
-  if (!c.use_lengths || d.flux_dn <= 0 || (blended && !o.flow_blended_seeds) || !IsEvidence(c, dash)) return false;
+  if (!c.use_lengths || d.flux_dn <= 0 || (blended && !o.ablation.flow_blended_seeds) || !IsEvidence(c, dash)) return false;
   const PixelPoint p = c.p[dash];
   const PixelPoint v = flow.Velocity(p);
   const double speed = std::hypot(v.x_px, v.y_px);
@@ -144,7 +144,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   if (10.0 * speed < kFlowNotDecodedTolerances * o.flow_tolerance_px) return false;
   const bool slow = 10.0 * speed < kSlowTolerances * o.flow_tolerance_px;
   if (slow && blended) return false;  // (a slow star's wrong readings land near its own images: no flux from them)
-  const bool crowded = o.flow_crowded_readings && !slow;  // the crowd's weaker evidence (below)
+  const bool crowded = o.ablation.flow_crowded_readings && !slow;  // the crowd's weaker evidence (below)
   const double flux_per_s = d.flux_dn / any_dash->duration_s;
   const FlowPath path = PlatePath(c, flow, p);
   const unsigned every_trail = (1u << c.per_trail.size()) - 1u;
@@ -206,7 +206,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
     return ev;
   };
   constexpr int kSlowFirst = 12, kSlowSecondTrailDots = 8, kSlowDurations = 5;
-  const int need_first = slow ? std::max(kSlowFirst, o.flow_min_images) : o.flow_min_images;
+  const int need_first = slow ? std::max(kSlowFirst, o.tuning.flow_min_images) : o.tuning.flow_min_images;
   const int need_second_dots = slow ? kSlowSecondTrailDots : kSecondTrailDots;
   const int need_durations = slow ? kSlowDurations : kDurations;
   int readings = 0;

@@ -199,7 +199,7 @@ std::vector<ForcedDot> MeasureMissingDots(const ScanPixels& scan, const std::vec
   std::vector<ForcedCandidate> candidates;
   for (int k = 0; k < static_cast<int>(linked.chains.size()); ++k) {
     const TrailChain& chain = linked.chains[k];
-    if (chain.trail <= 0 || chain.decoded_by == "flow_fill") continue;
+    if (chain.trail <= 0 || chain.decoded_by == TrailStep::kFlowFill) continue;
     const std::vector<ShutterExposure>& trail = per_trail[chain.trail - 1];
     TrailModel m;
     if (!BuildModel(images, linked, k, trail, trail_options, o.min_trail_images, &m)) continue;
@@ -235,7 +235,7 @@ std::vector<ForcedDot> MeasureMissingDots(const ScanPixels& scan, const std::vec
       if (o.remeasure && within.size() == 1) {
         const int j = within.front();
         const TrailImage& tj = linked.images[j];
-        if (!tj.assigned && tj.reason != "contested" && images[j].flux_dn > 0 &&
+        if (!tj.assigned && tj.reason != TrailReason::kContested && images[j].flux_dn > 0 &&
             Dist(images[j].point.position_px, c.predicted) <= o.remeasure_radius_px)
           c.replaces = j, crowded = false;
       }

@@ -23,7 +23,7 @@ bool Compatible(const Context& c, int i, const ShutterExposure& e, const PixelPo
   }
   if (c.use_lengths) {
     const double expect = e.duration_s * rate_px_per_s;
-    const double tol = c.o.dash_length_tolerance * expect + c.o.psf_fwhm_px + 3.0 * c.images[i].sigma_length_px;
+    const double tol = c.o.tuning.dash_length_tolerance * expect + c.o.psf_fwhm_px + 3.0 * c.images[i].sigma_length_px;
     // (whole V <= 8 plate: +110 dots right with point images taken as short dashes)
     const bool point_fits = c.images[i].length_px <= 0 && PointMayBeSwept(c.o, expect);
     if (!point_fits && std::abs(c.images[i].length_px - expect) > tol) return false;
@@ -31,11 +31,11 @@ bool Compatible(const Context& c, int i, const ShutterExposure& e, const PixelPo
     if (c.images[i].length_px >= 2.0 * c.o.psf_fwhm_px && rate_px_per_s > 0) {
       const double track_deg = std::atan2(velocity_px_per_s.y_px, velocity_px_per_s.x_px) * 180.0 / std::numbers::pi;
       const double off_deg = std::abs(std::remainder(c.images[i].angle_deg - track_deg, 180.0));
-      if (off_deg > c.o.max_run_bend_deg) return false;
+      if (off_deg > c.o.tuning.max_run_bend_deg) return false;
     }
     return true;
   }
-  return !(c.elongated[i] && e.duration_s < c.o.min_elongated_exposure_s);
+  return !(c.elongated[i] && e.duration_s < c.o.tuning.min_elongated_exposure_s);
 }
 
 Growth Grow(const Context& c, const Grid& all, const GrowSpec& spec) {
@@ -77,10 +77,10 @@ Growth Grow(const Context& c, const Grid& all, const GrowSpec& spec) {
     double spacing_s = 1e300;
     if (prev >= 0 && prev < n) spacing_s = std::abs(ex[j].mid_s - ex[prev].mid_s);
     if (next >= 0 && next < n) spacing_s = std::min(spacing_s, std::abs(ex[next].mid_s - ex[j].mid_s));
-    double tol = std::max(o.min_tolerance_px, o.match_tolerance * spacing_s * rate);
+    double tol = std::max(o.tuning.min_tolerance_px, o.match_tolerance * spacing_s * rate);
     const PixelPoint q = track.At(ex[j].mid_s);
     if (spec.extrapolated)
-      tol = std::min(tol, o.sibling_tolerance_px + o.sibling_tolerance_fraction * Dist(q, c.p[g.taken[nearest_k].second]));
+      tol = std::min(tol, o.tuning.sibling_tolerance_px + o.tuning.sibling_tolerance_fraction * Dist(q, c.p[g.taken[nearest_k].second]));
     int found = -1, count = 0;
     double nearest = 1e300, second = 1e300;
     all.Near(q.x_px, q.y_px, tol, [&](int i) {
@@ -105,12 +105,12 @@ Growth Grow(const Context& c, const Grid& all, const GrowSpec& spec) {
       track.SigmaAt(ex[j].mid_s, &sx, &sy);
       const double chi = std::sqrt(track.reduced_chi2());
       const double sigma_pred = std::hypot(sx, sy) * (chi < 1 ? chi : 1.0);
-      limit = std::max(o.tight_tolerance_px, 5.0 * std::hypot(sigma_pred, rms));
+      limit = std::max(o.tuning.tight_tolerance_px, 5.0 * std::hypot(sigma_pred, rms));
       // Across a break the track's model error, not its formal sigma, limits the first predictions.
       if (spec.extrapolated && g.after_run < 3) limit = std::max(limit, tol);
       if (count > 1 && nearest <= limit && second > 3.0 * limit) count = 1;
     }
-    if (count == 1 && nearest > o.tight_tolerance_px && nearest > limit) {
+    if (count == 1 && nearest > o.tuning.tight_tolerance_px && nearest > limit) {
       bool crowded = false;
       all.Near(c.p[found].x_px, c.p[found].y_px, 2.5 * o.psf_fwhm_px,
                [&](int i) { crowded = crowded || (i != found && !is_used(i)); });
@@ -152,8 +152,8 @@ Growth GrowSibling(const Context& c, const Grid& all, const std::vector<std::pai
   spec.first = earlier ? offset - 1 : static_cast<int>(c.per_trail[t].size());
   spec.step = earlier ? -1 : 1;
   spec.flux_per_s = flux_per_s;
-  spec.max_missed_in_row = c.o.max_missed_in_row;
-  spec.window_s = c.o.sibling_growth_window_s;
+  spec.max_missed_in_row = c.o.tuning.max_missed_in_row;
+  spec.window_s = c.o.tuning.sibling_growth_window_s;
   spec.extrapolated = true;
   spec.excluded = excluded;
   const Growth g = Grow(c, all, spec);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -53,12 +54,24 @@ inline double Dist(const PixelPoint& a, const PixelPoint& b) {
 class Grid {
  public:
   Grid(const std::vector<PixelPoint>& p, const std::vector<int>& ids, double cell) : p_(p), cell_(cell) {
-    for (int i : ids) cells_[Key(p[i].x_px, p[i].y_px)].push_back(i);
+    for (int i : ids) {
+      cells_[Key(p[i].x_px, p[i].y_px)].push_back(i);
+      const long cx = Cell(p[i].x_px), cy = Cell(p[i].y_px);
+      x_min_ = std::min(x_min_, cx), x_max_ = std::max(x_max_, cx);
+      y_min_ = std::min(y_min_, cy), y_max_ = std::max(y_max_, cy);
+    }
   }
-  // Calls f(j) for every point within r of (x, y).
+  // Calls f(j) for every point within r of (x, y). The cells searched are those the points occupy: a place
+  // predicted far off the plate (a flow carried beyond its images), with a tolerance that grows with the
+  // distance, must not walk millions of empty cells.
   template <class F>
   void Near(double x, double y, double r, F f) const {
-    const long x0 = Cell(x - r), x1 = Cell(x + r), y0 = Cell(y - r), y1 = Cell(y + r);
+    if (!(std::isfinite(x) && std::isfinite(y) && r >= 0.0 && r < 1e7)) return;
+    const double reach_x = std::max(x_min_ * cell_ - 1.0, std::min(x, (x_max_ + 1) * cell_ + 1.0));
+    const double reach_y = std::max(y_min_ * cell_ - 1.0, std::min(y, (y_max_ + 1) * cell_ + 1.0));
+    if (std::abs(reach_x - x) > r || std::abs(reach_y - y) > r) return;  // (no point can lie within r)
+    const long x0 = std::max(Cell(x - r), x_min_), x1 = std::min(Cell(x + r), x_max_);
+    const long y0 = std::max(Cell(y - r), y_min_), y1 = std::min(Cell(y + r), y_max_);
     for (long cy = y0; cy <= y1; ++cy)
       for (long cx = x0; cx <= x1; ++cx) {
         auto it = cells_.find(Pack(cx, cy));
@@ -75,6 +88,8 @@ class Grid {
   const std::vector<PixelPoint>& p_;
   double cell_;
   std::unordered_map<long long, std::vector<int>> cells_;
+  long x_min_ = std::numeric_limits<long>::max(), x_max_ = std::numeric_limits<long>::min();  // occupied cells
+  long y_min_ = std::numeric_limits<long>::max(), y_max_ = std::numeric_limits<long>::min();
 };
 
 // Whether p lies inside the scanned area (image_min_px/image_max_px, when set) and the exposed format
@@ -96,7 +111,7 @@ struct Context {
 // How far from q an image predicted by the flow may lie, carried there from origin: the flow's error grows
 // with the distance carried.
 inline double FlowTolerance_px(const TrailOptions& o, const PixelPoint& q, const PixelPoint& origin) {
-  return o.flow_tolerance_px + o.flow_tolerance_fraction * Dist(q, origin);
+  return o.flow_tolerance_px + o.tuning.flow_tolerance_fraction * Dist(q, origin);
 }
 
 inline bool IsLine(const DetectedStar& d) { return (d.flags & kStarDefect) && d.length_px > 0; }

@@ -20,29 +20,38 @@ bool TrailOptions::Check(std::string* why) const {
     if (why) *why = r;
     return false;
   };
-  if (!(run_spacing_tolerance > 0 && run_spacing_tolerance < 0.5)) return fail("run_spacing_tolerance must be in (0, 0.5)");
-  if (!(max_run_bend_deg > 0 && max_run_bend_deg < 45)) return fail("max_run_bend_deg must be in (0, 45)");
-  if (!(max_dash_spacing_px > 0)) return fail("max_dash_spacing_px must be > 0");
-  if (!(match_tolerance > 0 && match_tolerance < 0.5)) return fail("match_tolerance must be in (0, 0.5)");
-  if (!(min_tolerance_px > 0)) return fail("min_tolerance_px must be > 0");
-  if (min_exposures_after_run < 1) return fail("min_exposures_after_run must be >= 1");
-  if (max_missed_in_row < 1) return fail("max_missed_in_row must be >= 1");
-  if (!(min_elongated_exposure_s >= 0)) return fail("min_elongated_exposure_s must be >= 0");
-  if (!(dash_length_tolerance > 0)) return fail("dash_length_tolerance must be > 0");
   if (!(psf_fwhm_px > 0)) return fail("psf_fwhm_px must be > 0");
-  if (track_degree < 1 || track_degree > 6) return fail("track_degree must be 1..6");
-  if (!(bad_sigma > 1) || !(min_bad_px >= 0) || !(position_floor_px >= 0)) return fail("bad_sigma > 1, min_bad_px >= 0");
-  if (!(join_tolerance_px > 0) || !(join_tolerance_fraction >= 0)) return fail("join_tolerance_px must be > 0");
+  if (!(max_dash_spacing_px > 0)) return fail("max_dash_spacing_px must be > 0");
   if (!(edge_margin_px >= 0)) return fail("edge_margin_px must be >= 0");
-  if (!(max_median_residual_px > 0) || !(max_median_residual_fwhm >= 0)) return fail("max_median_residual_px must be > 0");
-  if (!(run_flux_tolerance > 0)) return fail("run_flux_tolerance must be > 0");
-  if (min_sibling_images < 1 || !(sibling_window_s >= 0)) return fail("min_sibling_images must be >= 1");
-  if (!(clean_radius_spacings >= 0)) return fail("clean_radius_spacings must be >= 0");
-  if (!(sibling_growth_window_s > 0)) return fail("sibling_growth_window_s must be > 0");
-  if (!(sibling_tolerance_px > 0) || !(sibling_tolerance_fraction >= 0)) return fail("sibling_tolerance_px must be > 0");
-  if (flow_degree < 1 || flow_degree > 10) return fail("flow_degree must lie in 1..10");
-  if (!(flow_tolerance_px > 0) || !(flow_tolerance_fraction >= 0)) return fail("flow_tolerance_px must be > 0");
-  if (flow_min_images < 6 || flow_min_sibling_images < 6) return fail("flow_min_images must be >= 6");
+  if (!(match_tolerance > 0 && match_tolerance < 0.5)) return fail("match_tolerance must be in (0, 0.5)");
+  if (!(flux_tolerance >= 0)) return fail("flux_tolerance must be >= 0");
+  if (!(position_floor_px >= 0)) return fail("position_floor_px must be >= 0");
+  if (track_degree < 1 || track_degree > 6) return fail("track_degree must be 1..6");
+  if (!(join_tolerance_px > 0)) return fail("join_tolerance_px must be > 0");
+  if (!(flow_tolerance_px > 0)) return fail("flow_tolerance_px must be > 0");
+  const Tuning& t = tuning;
+  if (!(t.run_spacing_tolerance > 0 && t.run_spacing_tolerance < 0.5)) return fail("run_spacing_tolerance must be in (0, 0.5)");
+  if (!(t.max_run_bend_deg > 0 && t.max_run_bend_deg < 45)) return fail("max_run_bend_deg must be in (0, 45)");
+  if (!(t.min_tolerance_px > 0)) return fail("min_tolerance_px must be > 0");
+  if (t.min_exposures_after_run < 1) return fail("min_exposures_after_run must be >= 1");
+  if (t.max_missed_in_row < 1) return fail("max_missed_in_row must be >= 1");
+  if (!(t.min_elongated_exposure_s >= 0)) return fail("min_elongated_exposure_s must be >= 0");
+  if (!(t.dash_length_tolerance > 0)) return fail("dash_length_tolerance must be > 0");
+  if (!(t.bad_sigma > 1) || !(t.min_bad_px >= 0)) return fail("bad_sigma must be > 1 and min_bad_px >= 0");
+  if (!(t.join_tolerance_fraction >= 0)) return fail("join_tolerance_fraction must be >= 0");
+  if (!(t.max_median_residual_px > 0) || !(t.max_median_residual_fwhm >= 0)) return fail("max_median_residual_px must be > 0");
+  if (!(t.run_flux_tolerance > 0)) return fail("run_flux_tolerance must be > 0");
+  if (!(t.crowd_radius_fwhm >= 0)) return fail("crowd_radius_fwhm must be >= 0");
+  if (!(t.tight_tolerance_px > 0)) return fail("tight_tolerance_px must be > 0");
+  if (!(t.max_leverage > 0 && t.max_leverage <= 1)) return fail("max_leverage must be in (0, 1]");
+  if (t.min_sibling_images < 1 || !(t.sibling_window_s >= 0)) return fail("min_sibling_images must be >= 1");
+  if (!(t.sibling_tolerance_px > 0) || !(t.sibling_tolerance_fraction >= 0)) return fail("sibling_tolerance_px must be > 0");
+  if (!(t.clean_radius_spacings >= 0)) return fail("clean_radius_spacings must be >= 0");
+  if (!(t.sibling_growth_window_s > 0)) return fail("sibling_growth_window_s must be > 0");
+  if (!(t.motion_radius_px > 0)) return fail("motion_radius_px must be > 0");
+  if (t.flow_degree < 1 || t.flow_degree > 10) return fail("flow_degree must lie in 1..10");
+  if (!(t.flow_tolerance_fraction >= 0)) return fail("flow_tolerance_fraction must be >= 0");
+  if (t.flow_min_images < 6 || t.flow_min_sibling_images < 6) return fail("flow_min_images must be >= 6");
   return true;
 }
 
@@ -77,13 +86,13 @@ constexpr int kSiblingFillImages = 3;
 void SegmentNeighbours(const Context& c, const Grid& dashes, const std::vector<int>& dash_ids,
                        std::unordered_map<int, std::vector<int>>* nb, std::unordered_map<int, bool>* open) {
   const TrailOptions& o = c.o;
-  const double sin_bend = std::sin(o.max_run_bend_deg * std::numbers::pi / 180.0);
+  const double sin_bend = std::sin(o.tuning.max_run_bend_deg * std::numbers::pi / 180.0);
   for (int i : dash_ids) {
     const DetectedStar& di = c.images[i];
     if (di.length_px <= 0) continue;
     const double a = di.angle_deg * std::numbers::pi / 180.0, ux = std::cos(a), uy = std::sin(a);
     const double expect = 1.5 * di.length_px;
-    const double along_tol = 2.0 * o.run_spacing_tolerance * expect + o.psf_fwhm_px;
+    const double along_tol = 2.0 * o.tuning.run_spacing_tolerance * expect + o.psf_fwhm_px;
     for (int side : {1, -1}) {
       int found = -1, count = 0;
       dashes.Near(c.p[i].x_px, c.p[i].y_px, expect + along_tol, [&](int j) {
@@ -93,7 +102,7 @@ void SegmentNeighbours(const Context& c, const Grid& dashes, const std::vector<i
         if (along <= 0 || std::abs(along - expect) > along_tol) return;
         if (across > std::max(0.5 * o.psf_fwhm_px, along * sin_bend)) return;
         const double dl = std::abs(c.images[j].length_px - di.length_px);
-        if (dl > o.dash_length_tolerance * di.length_px + o.psf_fwhm_px + 3.0 * (di.sigma_length_px + c.images[j].sigma_length_px))
+        if (dl > o.tuning.dash_length_tolerance * di.length_px + o.psf_fwhm_px + 3.0 * (di.sigma_length_px + c.images[j].sigma_length_px))
           return;
         found = j, ++count;
       });
@@ -106,7 +115,7 @@ void SegmentNeighbours(const Context& c, const Grid& dashes, const std::vector<i
 // Runs of leading dashes: elongated images equally spaced along a line (spatial order).
 std::vector<std::vector<int>> FindRuns(const Context& c, const Grid& dashes, const std::vector<int>& dash_ids) {
   const TrailOptions& o = c.o;
-  const double cos_bend = std::cos(o.max_run_bend_deg * std::numbers::pi / 180.0);
+  const double cos_bend = std::cos(o.tuning.max_run_bend_deg * std::numbers::pi / 180.0);
   // Each dash's two neighbours in a run: the nearest dash, and the nearest one opposite to it.
   std::unordered_map<int, std::vector<int>> nb;
   std::unordered_map<int, bool> open;
@@ -124,14 +133,14 @@ std::vector<std::vector<int>> FindRuns(const Context& c, const Grid& dashes, con
     auto spacing_ok = [&](double d, int j) {
       if (!c.use_lengths) return true;
       const double expect = 0.75 * (c.images[i].length_px + c.images[j].length_px);
-      return std::abs(d - expect) <= 2.0 * o.run_spacing_tolerance * expect + c.o.psf_fwhm_px;
+      return std::abs(d - expect) <= 2.0 * o.tuning.run_spacing_tolerance * expect + c.o.psf_fwhm_px;
     };
     if (!spacing_ok(d0, a)) continue;
     nb[i].push_back(a);
     const double ax = (c.p[a].x_px - c.p[i].x_px) / d0, ay = (c.p[a].y_px - c.p[i].y_px) / d0;
     for (size_t k = 1; k < near.size(); ++k) {
       const auto [d, b] = near[k];
-      if (std::abs(d - d0) > o.run_spacing_tolerance * d0) continue;
+      if (std::abs(d - d0) > o.tuning.run_spacing_tolerance * d0) continue;
       const double cb = (ax * (c.p[b].x_px - c.p[i].x_px) + ay * (c.p[b].y_px - c.p[i].y_px)) / d;
       if (cb <= -cos_bend && spacing_ok(d, b)) {
         nb[i].push_back(b);
@@ -168,7 +177,7 @@ std::vector<std::vector<int>> FindRuns(const Context& c, const Grid& dashes, con
     std::vector<double> gaps;
     for (size_t k = 1; k < run.size(); ++k) gaps.push_back(Dist(c.p[run[k]], c.p[run[k - 1]]));
     const double mean = std::accumulate(gaps.begin(), gaps.end(), 0.0) / gaps.size();
-    for (double g : gaps) ok = ok && std::abs(g - mean) <= o.run_spacing_tolerance * mean;
+    for (double g : gaps) ok = ok && std::abs(g - mean) <= o.tuning.run_spacing_tolerance * mean;
     // An end dash with several candidates beyond it: the run may continue through a crossing.
     ok = ok && !open[run.front()] && !open[run.back()];
     if (ok) runs.push_back(run);
@@ -223,7 +232,7 @@ bool FitTrail(const Context& c, const std::vector<std::pair<int, int>>& taken, T
     int worst = -1;
     for (int k = 0; k < n; ++k) {
       if (bad[k]) continue;
-      if (chi[k] > o.bad_sigma * spread && deleted[k] > o.min_bad_px && (worst < 0 || chi[k] > chi[worst])) worst = k;
+      if (chi[k] > o.tuning.bad_sigma * spread && deleted[k] > o.tuning.min_bad_px && (worst < 0 || chi[k] > chi[worst])) worst = k;
     }
     // At most a third of the images bad, and enough left for the track.
     if (worst < 0 || marked + 1 > n / 3 || ft.size() <= 6) break;
@@ -242,7 +251,7 @@ bool FitTrail(const Context& c, const std::vector<std::pair<int, int>>& taken, T
     track.SigmaAt(t[k], &ti.sigma_refined_x_px, &ti.sigma_refined_y_px);
     ti.bad = bad[k];
     if (bad[k]) {
-      ti.reason = "bad_fit";
+      ti.reason = TrailReason::kBadFit;
       ++chain->bad_images;
     } else {
       ss += ti.residual_px * ti.residual_px, ++good;
@@ -254,10 +263,23 @@ bool FitTrail(const Context& c, const std::vector<std::pair<int, int>>& taken, T
 }
 
 // Tags an image as exposure e of chain `chain` (its other fields untouched).
+// The result's counts, from the tags themselves: the steps tag and take tags back, the counts follow.
+void CountTags(TrailLinkResult* r) {
+  r->assigned_dots = r->assigned_dashes = r->bad_images = 0;
+  for (TrailChain& tc : r->chains) tc.bad_images = 0;
+  for (const TrailImage& ti : r->images) {
+    if (!ti.assigned) continue;
+    (ti.kind == ExposureKind::kDot ? r->assigned_dots : r->assigned_dashes)++;
+    if (!ti.bad) continue;
+    ++r->bad_images;
+    if (ti.chain >= 0) ++r->chains[static_cast<size_t>(ti.chain)].bad_images;
+  }
+}
+
 void TagAs(TrailImage* ti, int chain, const ShutterExposure& e) {
   ti->chain = chain;
   ti->assigned = true;
-  ti->reason.clear();
+  ti->reason = TrailReason::kNone;
   ti->trail = e.trail;
   ti->kind = e.kind;
   ti->dot_index = e.dot_index;
@@ -296,10 +318,10 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     c.p[i] = d.point.position_px;
     if (d.point.status != PointStatus::kMeasured || (d.flags & kStarDefect)) {
       if (trail_internal::IsLine(d)) c.lines.push_back(static_cast<int>(i));
-      result.images[i].reason = "not_star";
+      result.images[i].reason = TrailReason::kNotStar;
       continue;
     }
-    result.images[i].reason = "unlinked";
+    result.images[i].reason = TrailReason::kUnlinked;
     c.usable[i] = true;
     c.elongated[i] = (d.flags & kStarElongated) != 0;
     c.use_lengths = c.use_lengths || d.length_px > 0;
@@ -319,10 +341,10 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
                                                                      // its run, dash spacing)
   for (const std::vector<int>& run : FindRuns(c, dashes, dash_ids)) {
     TrailChain tc;
-    tc.decoded_by = "run";
+    tc.decoded_by = TrailStep::kRun;
     tc.leading_dashes = static_cast<int>(run.size());
     tc.images = run;
-    auto refuse = [&](const std::string& reason) {
+    auto refuse = [&](TrailReason reason) {
       tc.reason = reason;
       for (int i : run)
         if (result.images[i].chain < 0) result.images[i].reason = reason;
@@ -330,7 +352,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     };
     const auto it = std::find(program.leading_dashes.begin(), program.leading_dashes.end(), tc.leading_dashes);
     if (it == program.leading_dashes.end()) {
-      refuse("leading_dashes_incomplete");
+      refuse(TrailReason::kLeadingDashesIncomplete);
       continue;
     }
     const int t = static_cast<int>(it - program.leading_dashes.begin());
@@ -347,9 +369,9 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       if (median > 0)
         for (int i : {run.front(), run.back()})
           same = same && std::abs(images[i].flux_dn - median) <=
-                             options.run_flux_tolerance * median + 4.0 * images[i].sigma_flux_dn;
+                             options.tuning.run_flux_tolerance * median + 4.0 * images[i].sigma_flux_dn;
       if (!same) {
-        refuse("run_flux");
+        refuse(TrailReason::kRunFlux);
         continue;
       }
     }
@@ -369,13 +391,13 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       for (size_t k = 0; k < run.size(); ++k) spec.seed.push_back({static_cast<int>(k), ordered[dir][k]});
       spec.first = static_cast<int>(run.size());
       spec.flux_per_s = flux_per_s;
-      spec.max_missed_in_row = options.max_missed_in_row;
+      spec.max_missed_in_row = options.tuning.max_missed_in_row;
       grown[dir] = Grow(c, all, spec);
     }
-    const bool ok0 = grown[0].after_run >= options.min_exposures_after_run;
-    const bool ok1 = grown[1].after_run >= options.min_exposures_after_run;
+    const bool ok0 = grown[0].after_run >= options.tuning.min_exposures_after_run;
+    const bool ok1 = grown[1].after_run >= options.tuning.min_exposures_after_run;
     if (ok0 == ok1) {
-      refuse(ok0 ? "ambiguous" : "short_pattern");
+      refuse(ok0 ? TrailReason::kAmbiguous : TrailReason::kShortPattern);
       continue;
     }
     const int dir = ok0 ? 0 : 1;
@@ -385,7 +407,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     const PixelPoint a = c.p[r[0]], b = c.p[r[1]];
     const PixelPoint before{2 * a.x_px - b.x_px, 2 * a.y_px - b.y_px};
     if (!trail_internal::Inside(options, before, options.edge_margin_px)) {
-      refuse("at_edge");
+      refuse(TrailReason::kAtEdge);
       continue;
     }
     // An image there that cannot hold a dash of this star (measured flux under half a dash's and
@@ -393,7 +415,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     double dash_flux = 0, dash_length = 0;
     for (int i : run) dash_flux += images[i].flux_dn / run.size(), dash_length += images[i].length_px / run.size();
     trail_internal::DashHolder holder{dash_flux, dash_length};
-    trail_internal::ForReaching(c, all, before, std::max(options.min_tolerance_px, 0.5 * Dist(a, b)),
+    trail_internal::ForReaching(c, all, before, std::max(options.tuning.min_tolerance_px, 0.5 * Dist(a, b)),
                                 [&](int i) { holder.Add(images[i]); });
     const bool occupied = holder.Holds();
     // Occupied: the number needs its siblings' confirmation (step 4); no clean-field exception.
@@ -411,8 +433,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     for (const auto& [j, i] : grown[dir].taken) {
       if (j < tc.leading_dashes && flux_per_s > 0 &&
           std::abs(images[i].flux_dn - flux_per_s * c.per_trail[t][j].duration_s) >
-              options.run_flux_tolerance * flux_per_s * c.per_trail[t][j].duration_s + 4.0 * images[i].sigma_flux_dn) {
-        result.images[i].reason = "blended";
+              options.tuning.run_flux_tolerance * flux_per_s * c.per_trail[t][j].duration_s + 4.0 * images[i].sigma_flux_dn) {
+        result.images[i].reason = TrailReason::kBlended;
         continue;
       }
       taken.push_back({j, i});
@@ -428,10 +450,9 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   std::vector<Track> tracks(result.chains.size());
   std::vector<std::vector<std::pair<int, int>>> kept_of(result.chains.size());  // (exposure, image) per chain
   // A trail refused after its images were tagged: the tags are taken back, the images keep `reason`.
-  auto refuse = [&result](TrailChain& tc, const std::vector<std::pair<int, int>>& kept, const std::string& reason) {
+  auto refuse = [&result](TrailChain& tc, const std::vector<std::pair<int, int>>& kept, TrailReason reason) {
     for (const auto& [j, i] : kept) {
       TrailImage& ti = result.images[i];
-      (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
       ti = TrailImage{};
       ti.reason = reason;
     }
@@ -444,24 +465,23 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   // A trail must keep min_images (0: its leading dashes + half of min_exposures_after_run).
   auto settle = [&](int cid, const std::vector<std::pair<int, int>>& taken, int min_images = 0) -> bool {
     TrailChain& tc = result.chains[cid];
-    if (min_images <= 0) min_images = tc.leading_dashes + options.min_exposures_after_run / 2;
+    if (min_images <= 0) min_images = tc.leading_dashes + options.tuning.min_exposures_after_run / 2;
     const std::vector<ShutterExposure>& ex = c.per_trail[tc.trail - 1];
     std::vector<std::pair<int, int>> kept;
     tc.images.clear();
     for (const auto& [j, i] : taken) {
       TrailImage& ti = result.images[i];
       if (owner_count[i] > 1) {
-        ti.reason = "contested";
+        ti.reason = TrailReason::kContested;
         continue;
       }
       kept.push_back({j, i});
       tc.images.push_back(i);
       TagAs(&ti, cid, ex[j]);
-      (ex[j].kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
     }
     // 3. The sidereal fit (a trail left with too few images after the contested ones is refused).
     if (static_cast<int>(kept.size()) < min_images || !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
-      refuse(tc, kept, "contested");
+      refuse(tc, kept, TrailReason::kContested);
       return false;
     }
     // Another star's images taken along the way (a crowded field) leave the track off most of them;
@@ -472,17 +492,17 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       for (const auto& [j, i] : kept)
         if (!result.images[i].bad) res.push_back(result.images[i].residual_px);
       std::nth_element(res.begin(), res.begin() + res.size() / 2, res.end());
-      const double limit = std::max(options.max_median_residual_px, options.max_median_residual_fwhm * options.psf_fwhm_px);
+      const double limit = std::max(options.tuning.max_median_residual_px, options.tuning.max_median_residual_fwhm * options.psf_fwhm_px);
       if (!res.empty()) median_residual = res[res.size() / 2];
       if (res.empty() || res[res.size() / 2] > limit) {
-        refuse(tc, kept, "poor_track");
+        refuse(tc, kept, TrailReason::kPoorTrack);
         return false;
       }
     }
     // A bad image, or one off the track by more than tight_tolerance_px, with other images around it
-    // is likely another star's (a crowded field): not tagged ("off_track"). Alone, it is the trail's own
+    // is likely another star's (a crowded field): not tagged (TrailReason::kOffTrack). Alone, it is the trail's own
     // displaced image: tagged, flagged bad. An image the track merely follows (leverage above
-    // max_leverage: beyond a long gap at the trail's end) cannot be checked: not tagged ("unverified"; the
+    // max_leverage: beyond a long gap at the trail's end) cannot be checked: not tagged (TrailReason::kUnverified; the
     // plate's flow may check it, step 7).
     bool refused = false;
     for (int pass = 0; pass < 3 && !refused; ++pass) {  // until nothing more is dropped
@@ -522,9 +542,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
               on_own = 3.0 * std::hypot(sx, sy) <= limit_px && Dist(own.At(ti.mid_s), c.p[i]) <= limit_px;
             }
             if (!on_own) {
-              (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
               ti = TrailImage{};
-              ti.reason = own_fitted ? "off_track" : "unverified";
+              ti.reason = own_fitted ? TrailReason::kOffTrack : TrailReason::kUnverified;
               dropped = true;
               continue;
             }
@@ -532,9 +551,9 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           // (an image the detector split from a neighbour, `blended`: off the track already beyond 3 median
           // residuals of the trail, 3.5 sigma, and 0.1 px)
           const bool split = (images[i].flags & kStarBlended) != 0;
-          if (ti.bad || ti.residual_px > (split ? std::min(options.tight_tolerance_px, std::max(0.1, 3.0 * median_residual))
-                                                : options.tight_tolerance_px))
-            all.Near(c.p[i].x_px, c.p[i].y_px, options.crowd_radius_fwhm * options.psf_fwhm_px, [&](int o) {
+          if (ti.bad || ti.residual_px > (split ? std::min(options.tuning.tight_tolerance_px, std::max(0.1, 3.0 * median_residual))
+                                                : options.tuning.tight_tolerance_px))
+            all.Near(c.p[i].x_px, c.p[i].y_px, options.tuning.crowd_radius_fwhm * options.psf_fwhm_px, [&](int o) {
               if (o != i && result.images[o].chain != cid) crowded = true;
             });
           double hx = 0, hy = 0;
@@ -542,12 +561,10 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
             const trail_internal::FitSigma sigma = trail_internal::FitSigmaOf(options, images[i]);
             tracks[cid].LeverageAt(ti.mid_s, sigma.x_px, sigma.y_px, &hx, &hy);
           }
-          const bool unverified = std::max(hx, hy) > options.max_leverage;
+          const bool unverified = std::max(hx, hy) > options.tuning.max_leverage;
           if (crowded || unverified) {
-            (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
-            if (ti.bad) --tc.bad_images;
             ti = TrailImage{};
-            ti.reason = unverified ? "unverified" : "off_track";
+            ti.reason = unverified ? TrailReason::kUnverified : TrailReason::kOffTrack;
             dropped = true;
             continue;
           }
@@ -559,9 +576,9 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       if (!dropped) break;
       {  // the track without them
         tc.bad_images = 0;
-        for (const auto& [j, i] : kept) result.images[i].bad = false, result.images[i].reason.clear();
+        for (const auto& [j, i] : kept) result.images[i].bad = false, result.images[i].reason = TrailReason::kNone;
         if (static_cast<int>(kept.size()) < min_images || !FitTrail(c, kept, &tc, &result.images, &tracks[cid])) {
-          refuse(tc, kept, "off_track");
+          refuse(tc, kept, TrailReason::kOffTrack);
           refused = true;
           break;
         }
@@ -569,7 +586,6 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     }
     if (refused) return false;
     kept_of[cid] = kept;
-    result.bad_images += tc.bad_images;
     return true;
   };
   for (size_t g = 0; g < taken_by.size(); ++g) settle(chain_of_taken[g], taken_by[g]);
@@ -691,7 +707,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     int alt = 0;
     for (int u : {t - 1, t + 1})
       if (u >= 0 && u < trails) alt = std::max(alt, sibling_score(k, u));
-    if (alt >= options.min_sibling_images && 2 * alt > own) {
+    if (alt >= options.tuning.min_sibling_images && 2 * alt > own) {
       doubtful[k] = true;  // its siblings say another number
       continue;
     }
@@ -711,7 +727,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     const auto& [before, spacing] = before_of.at(k);
     const auto& [dash_flux, dash_length] = dash_of.at(k);
     trail_internal::DashHolder holder{dash_flux, dash_length};
-    trail_internal::ForReaching(c, all, before, options.clean_radius_spacings * spacing, [&](int i) {
+    trail_internal::ForReaching(c, all, before, options.tuning.clean_radius_spacings * spacing, [&](int i) {
       if (result.images[i].chain != k) holder.Add(images[i]);
     });
     const bool clean = !holder.Holds();
@@ -720,19 +736,17 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     const bool unresolved = spacing / 3.0 < options.psf_fwhm_px;
     if (!clean || before_occupied[k] || unresolved)
       doubtful[k] = true, joined[k] = false,
-      result.chains[k].reason = before_occupied[k] ? "image_before_run" : unresolved ? "unresolved_run" : "unconfirmed";
+      result.chains[k].reason = before_occupied[k] ? TrailReason::kImageBeforeRun : unresolved ? TrailReason::kUnresolvedRun : TrailReason::kUnconfirmed;
   }
   if (options.require_joined)
     for (int k : decoded_ids)
-      if (!doubtful[k] && !joined[k]) doubtful[k] = true, result.chains[k].reason = "lone_trail";
+      if (!doubtful[k] && !joined[k]) doubtful[k] = true, result.chains[k].reason = TrailReason::kLoneTrail;
   for (int k = 0; k < m; ++k) {
     if (!doubtful[k]) continue;
     TrailChain& tc = result.chains[k];
-    if (tc.reason.empty()) tc.reason = "doubtful_number";
+    if (tc.reason == TrailReason::kNone) tc.reason = TrailReason::kDoubtfulNumber;
     for (const auto& [j, i] : kept_of[k]) {
       TrailImage& ti = result.images[i];
-      (ti.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)--;
-      if (ti.bad) --result.bad_images;
       ti = TrailImage{};
       ti.reason = tc.reason;
     }
@@ -756,7 +770,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   for (int k = 0; k < m; ++k)
     if (decoded(k)) numbers[Root(parent, k)] |= 1 << (result.chains[k].trail - 1);
   // A new chain of trail s (0-based) found by `step`, a star of its own, with nothing taken yet; its index.
-  auto open_chain = [&](const char* step, int s, double flux_per_s, double rate_px_per_s) {
+  auto open_chain = [&](TrailStep step, int s, double flux_per_s, double rate_px_per_s) {
     const int cid = static_cast<int>(result.chains.size());
     TrailChain tc;
     tc.decoded_by = step;
@@ -772,7 +786,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     return cid;
   };
   // A new chain (trail number s, its images (exposure, image)) as a star of its own; false when refused.
-  auto add_chain = [&](const char* step, int s, const std::vector<std::pair<int, int>>& taken, double flux_per_s,
+  auto add_chain = [&](TrailStep step, int s, const std::vector<std::pair<int, int>>& taken, double flux_per_s,
                        double rate_px_per_s, int missed, int min_images = 0) {
     const int cid = open_chain(step, s, flux_per_s, rate_px_per_s);
     result.chains[cid].missed_exposures = missed;
@@ -792,17 +806,16 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           std::vector<std::pair<int, int>> taken;  // exposures of trail s
           const Growth g = trail_internal::GrowSibling(c, all, kept_of[k], t, s, flux_of.at(k),
                                                        [&](int i) { return result.images[i].chain >= 0; }, &taken);
-          if (g.after_run < options.min_exposures_after_run) continue;
+          if (g.after_run < options.tuning.min_exposures_after_run) continue;
           const int cid = static_cast<int>(result.chains.size());
-          if (!add_chain("sibling", s, taken, flux_of.at(k), g.rate_px_per_s, g.missed)) continue;
+          if (!add_chain(TrailStep::kSibling, s, taken, flux_of.at(k), g.rate_px_per_s, g.missed)) continue;
           // It must join k: each track carried to the other's end lands on it.
           double k0 = 0, k1 = 0, n0 = 0, n1 = 0;
           ends(k, &k0, &k1);
           ends(cid, &n0, &n1);
           const bool joins_k = s < t ? on_one_arc(tracks[cid], n1, tracks[k], k0) : on_one_arc(tracks[k], k1, tracks[cid], n0);
           if (!joins_k) {
-            result.bad_images -= result.chains[cid].bad_images;
-            refuse(result.chains[cid], kept_of[cid], "unjoined");
+            refuse(result.chains[cid], kept_of[cid], TrailReason::kUnjoined);
             kept_of[cid].clear();
             continue;
           }
@@ -842,11 +855,11 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       heading[k] = {v.x_px / speed, v.y_px / speed};
       moving.push_back(k);
     }
-    const Grid mids(mid_of, moving, options.motion_radius_px);
+    const Grid mids(mid_of, moving, options.tuning.motion_radius_px);
     auto motion_at = [&](const PixelPoint& p, PixelPoint* unit) {
       double sx = 0, sy = 0;
       int n = 0;
-      mids.Near(p.x_px, p.y_px, options.motion_radius_px, [&](int k) { sx += heading[k].x_px, sy += heading[k].y_px, ++n; });
+      mids.Near(p.x_px, p.y_px, options.tuning.motion_radius_px, [&](int k) { sx += heading[k].x_px, sy += heading[k].y_px, ++n; });
       const double len = std::hypot(sx, sy);
       if (n < 2 || len < 0.9 * n) return false;
       *unit = {sx / len, sy / len};
@@ -857,7 +870,6 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       trail_internal::PatternTrail pt;
       PixelPoint unit;
       const bool known = motion_at(c.p[dash], &unit);
-      if (options.require_motion && !known) continue;
       if (!trail_internal::GrowFromSeparator(c, all, dash, reference, known ? &unit : nullptr, excluded, &pt)) continue;
       trail_internal::SiblingGrowth grown;
       const int best = trail_internal::NumberBySiblings(c, all, pt, reference, program.leading_dashes, other_number, &grown);
@@ -867,7 +879,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       for (const auto& [j, i] : pt.taken)
         if (j + shift >= 0) taken.push_back({j + shift, i});
       const int cid = static_cast<int>(result.chains.size());
-      if (!add_chain("separators", best, taken, pt.flux_per_s, grown.rate_px_per_s, 0)) continue;
+      if (!add_chain(TrailStep::kSeparators, best, taken, pt.flux_per_s, grown.rate_px_per_s, 0)) continue;
       // Its sibling's images taken by a decoded trail of that number: the two join when they lie on one arc.
       const int sib = grown.sibling;
       const std::vector<std::pair<int, int>>& sibling_images = grown.images;
@@ -895,7 +907,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     std::vector<PixelPoint> samples_p, samples_v;
     int sampled_trails = 0;
     for (int k = 0; k < static_cast<int>(result.chains.size()); ++k) {
-      if (!decoded(k) || static_cast<int>(kept_of[k].size()) < options.min_exposures_after_run) continue;
+      if (!decoded(k) || static_cast<int>(kept_of[k].size()) < options.tuning.min_exposures_after_run) continue;
       std::vector<double> ts;
       for (const auto& [j, i] : kept_of[k]) ts.push_back(result.images[i].mid_s);
       trail_internal::AddFlowSamples(tracks[k], ts, &samples_p, &samples_v);
@@ -903,7 +915,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     }
     // A polynomial of degree d has (d + 1)(d + 2) / 2 terms: at least as many trails, spread over the plate.
     SkyFlow flow;
-    for (int degree = options.flow_degree; degree >= 2 && !flow.ok(); --degree)
+    for (int degree = options.tuning.flow_degree; degree >= 2 && !flow.ok(); --degree)
       if (sampled_trails >= (degree + 1) * (degree + 2) / 2) flow.Fit(samples_p, samples_v, degree);
     if (!flow.ok()) return;
     const auto excluded = [&](int i) { return result.images[i].chain >= 0; };
@@ -942,8 +954,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         if (ks.size() == 2) strays = ks;
         for (int k : strays) {
           numbers[root] &= ~(1 << (result.chains[k].trail - 1));
-          result.bad_images -= result.chains[k].bad_images;
-          refuse(result.chains[k], kept_of[k], "off_flow");
+          refuse(result.chains[k], kept_of[k], TrailReason::kOffFlow);
           kept_of[k].clear();
         }
       }
@@ -953,7 +964,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     auto add_star = [&](const trail_internal::FlowStar& star, double rate_px_per_s, int root) {
       const bool new_star = root < 0;
       // (a decoded star's missing trail: its timing is the star's, its images need only be many enough for the fit)
-      const int min_images = root >= 0 ? options.flow_min_sibling_images : options.flow_min_images;
+      const int min_images = root >= 0 ? options.tuning.flow_min_sibling_images : options.tuning.flow_min_images;
       for (int s = 0; s < trails; ++s) {
         if (static_cast<int>(star.taken[s].size()) < min_images) continue;
         if (root >= 0 && (numbers[Root(parent, root)] >> s & 1)) continue;
@@ -965,7 +976,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           continue;
         const int cid = static_cast<int>(result.chains.size());
         // (the flow fixes its timing: no leading dashes needed)
-        if (!add_chain("flow", s, star.taken[s], star.flux_per_s, rate_px_per_s, 0, min_images)) continue;
+        if (!add_chain(TrailStep::kFlow, s, star.taken[s], star.flux_per_s, rate_px_per_s, 0, min_images)) continue;
         if (root < 0) {
           root = cid;
           continue;
@@ -1032,19 +1043,19 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     // Lone trails: stars the loop above left undecided, numbered by their runs (nothing else confirms the
     // number: not with require_joined).
     const auto trail_of = [&](int i) { return result.images[i].assigned ? result.images[i].trail : 0; };
-    if (options.flow_lone_trails && !options.require_joined)
+    if (options.ablation.flow_lone_trails && !options.require_joined)
       for (int dash : seeds) {
         if (result.images[dash].chain >= 0) continue;
         trail_internal::LoneTrail lone;
         if (!trail_internal::DecodeLoneTrail(c, all, flow, dash, excluded, trail_of, &lone)) continue;
         const PixelPoint v = flow.Velocity(c.p[dash]);
-        add_chain("lone", lone.trail, lone.taken, lone.flux_per_s, std::hypot(v.x_px, v.y_px), 0,
-                  options.flow_min_images);
+        add_chain(TrailStep::kLone, lone.trail, lone.taken, lone.flux_per_s, std::hypot(v.x_px, v.y_px), 0,
+                  options.tuning.flow_min_images);
       }
     complete_stars();  // the new stars' trails short of flow_min_images in their reading
     // An exposure's place along the flow (q, carried from origin): exactly one image (assigned or not) within
-    // the flow's tolerance, unassigned, refused by no check but a track's ("unlinked", "unverified", or
-    // "off_track": more than tight_tolerance_px off a track fitted among other stars' images -- then within
+    // the flow's tolerance, unassigned, refused by no check but a track's (TrailReason::kUnlinked, TrailReason::kUnverified, or
+    // TrailReason::kOffTrack: more than tight_tolerance_px off a track fitted among other stars' images -- then within
     // that of the place: the flow from a trail's end predicts what its track does, and the image its own
     // track dropped must not come back), compatible (length, flux) and no piece shared in a clump; -1
     // otherwise.
@@ -1057,10 +1068,10 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         if (c.usable[o]) ++near, i = o;
       });
       if (near != 1) return -1;
-      const std::string& why = result.images[i].reason;  // (unassigned, and refused by no check but a track's)
+      const TrailReason why = result.images[i].reason;  // (unassigned, and refused by no check but a track's)
       const bool shared = (images[i].flags & kStarCrowded) && (images[i].flags & kStarBlended);
-      const bool off_track = why == "off_track" && Dist(c.p[i], q) <= options.tight_tolerance_px;
-      if ((why != "unlinked" && why != "unverified" && !off_track) || shared ||
+      const bool off_track = why == TrailReason::kOffTrack && Dist(c.p[i], q) <= options.tuning.tight_tolerance_px;
+      if ((why != TrailReason::kUnlinked && why != TrailReason::kUnverified && !off_track) || shared ||
           !trail_internal::Compatible(c, i, e, path.VelocityAt(dt), flux_per_s))
         return -1;
       return i;
@@ -1078,7 +1089,6 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       ti.refined_px = c.p[i];
       const trail_internal::FitSigma sigma = trail_internal::FitSigmaOf(options, images[i]);
       ti.sigma_refined_x_px = sigma.x_px, ti.sigma_refined_y_px = sigma.y_px;
-      (e.kind == ExposureKind::kDot ? result.assigned_dots : result.assigned_dashes)++;
       kept_of[k].push_back({je, i});
       std::sort(kept_of[k].begin(), kept_of[k].end());
       std::vector<int>& chain_images = result.chains[k].images;
@@ -1093,10 +1103,10 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     // Each decoded trail's exposures without an image, filled along the flow: carried from the trail's image
     // nearest in time (the track there), an exposure's place must hold one image as flow_place_image says.
     // Such images lie beyond the growth's reach (after exposures missed in a row, where a crossing star took
-    // the trail's images) or beyond the track's (a long gap at its end: "unverified"); the flow checks them.
-    // In a gap inside the trail only an image nothing refused ("unlinked") within tight_tolerance_px of
+    // the trail's images) or beyond the track's (a long gap at its end: TrailReason::kUnverified); the flow checks them.
+    // In a gap inside the trail only an image nothing refused (TrailReason::kUnlinked) within tight_tolerance_px of
     // the track (the flow alone took a dash merged with a crossing star's there: 1 wrong tag).
-    if (options.flow_fills_trails)
+    if (options.ablation.flow_fills_trails)
       for (int k = 0; k < static_cast<int>(result.chains.size()); ++k) {
         if (!decoded(k)) continue;
         const std::vector<ShutterExposure>& ex = c.per_trail[result.chains[k].trail - 1];
@@ -1119,8 +1129,8 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
           if (!path.Covers(dt)) continue;
           const int i = flow_place_image(path, dt, origin, e, flux_of.at(k));
           // (a gap inside: the track knows the place too; an image it or a crowd check refused stays out)
-          if (i < 0 || (inside && (result.images[i].reason != "unlinked" ||
-                                   Dist(c.p[i], tracks[k].At(e.mid_s)) > options.tight_tolerance_px)))
+          if (i < 0 || (inside && (result.images[i].reason != TrailReason::kUnlinked ||
+                                   Dist(c.p[i], tracks[k].At(e.mid_s)) > options.tuning.tight_tolerance_px)))
             continue;
           tag_flow_checked(k, je, i, path.At(dt));
         }
@@ -1133,7 +1143,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
     // of places tried). An exposure whose neighbours' places lie within two tolerances of its own (a slow
     // star) is skipped; a place holding an image tagged with that trail number (the trail decoded as
     // another star's) leaves the trail alone.
-    if (options.flow_fills_siblings)
+    if (options.ablation.flow_fills_siblings)
       for_missing_trails([&](int root, int s, int k, double t_end, const PixelPoint& origin) {
         const std::vector<ShutterExposure>& ex = c.per_trail[s];
         const double reach_s = std::max(std::abs(ex.front().mid_s - t_end), std::abs(ex.back().mid_s - t_end));
@@ -1166,7 +1176,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         if (static_cast<int>(found.size()) < kSiblingFillImages || trail_internal::DistinctCount(durations_s) < 2) return;
         const PixelPoint v = flow.Velocity(origin);
         // (no track of its own: its images are the flow's) joined to the star
-        const int cid = open_chain("flow_fill", s, flux_of.at(k), std::hypot(v.x_px, v.y_px));
+        const int cid = open_chain(TrailStep::kFlowFill, s, flux_of.at(k), std::hypot(v.x_px, v.y_px));
         const int r = Root(parent, root);
         parent[cid] = r;
         numbers[r] |= 1 << s;
@@ -1174,12 +1184,12 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
         recount_missed(cid);
       });
   };
-  if (options.grow_siblings) GrowSiblings();
-  if (options.pattern_trails) {
+  if (options.ablation.grow_siblings) GrowSiblings();
+  if (options.ablation.pattern_trails) {
     PatternTrails();
-    if (options.grow_siblings) GrowSiblings();
+    if (options.ablation.grow_siblings) GrowSiblings();
   }
-  if (options.flow_trails) FlowTrails();
+  if (options.ablation.flow_trails) FlowTrails();
   // A star may hold each trail number once; otherwise its trails stay stars of their own.
   std::unordered_map<int, std::vector<int>> members;
   for (int k = 0; k < static_cast<int>(result.chains.size()); ++k)
@@ -1200,8 +1210,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   for (const std::vector<int>& g : groups) {
     // (with require_joined every trail tagged has a sibling of its star: the later steps' lone ones too)
     if (options.require_joined && g.size() < 2) {
-      result.bad_images -= result.chains[g[0]].bad_images;
-      refuse(result.chains[g[0]], kept_of[g[0]], "lone_trail");
+      refuse(result.chains[g[0]], kept_of[g[0]], TrailReason::kLoneTrail);
       kept_of[g[0]].clear();
       continue;
     }
@@ -1212,6 +1221,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
       for (int i : result.chains[k].images) result.images[i].star = s;
     }
   }
+  CountTags(&result);
   return result;
 }
 

@@ -94,16 +94,16 @@ int DurationsRequired(const Context& c, const FlowPath& path, int trail, double 
     else
       cut = cut || ex[k].kind == ExposureKind::kDot;
   }
-  if (!cut || !c.o.flow_cut_trails) return kDurations;
+  if (!cut || !c.o.ablation.flow_cut_trails) return kDurations;
   return std::max(kMinDurationsCut, std::min(kDurations, DistinctCount(on_format_s)));
 }
 
-// What the scan's pixels show at the place of a dash of the star dt from the seed (flow_lone_pixel_dashes;
-// nothing measured without them): its thirds fitted with the light of the detections about it
+// What the scan's pixels show at the place of a dash of the star dt from the seed (where LinkTrails was
+// given them; nothing measured without them): its thirds fitted with the light of the detections about it
 // (MeasureDashInPixels).
 DashInPixels DashInScan(const Context& c, const Grid& all, const FlowPath& path, double dt, double dash_length_px,
                         double dash_flux_dn) {
-  if (!c.o.flow_lone_pixel_dashes || !c.scan) return {};
+  if (!c.scan) return {};
   const PixelPoint q = path.At(dt), v = path.VelocityAt(dt);
   DashPlace place;
   place.centre_px = q;
@@ -242,7 +242,7 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
     if (e.off) {
       // Dash m's own place beyond the format: the run may go on there. (Only a merge reaching beyond it:
       // no such explanation, dash m is judged alone.)
-      if (!o.flow_entering_trails) return false;
+      if (!o.ablation.flow_entering_trails) return false;
       off_format = true;
       break;
     }
@@ -276,8 +276,8 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
     }
     // Something at dash m's place: the run's own dash mismeasured (merged with a neighbour, cut, shaped
     // wrong) where the run goes on, one dash (single, or the last of merged ones) at the place before it.
-    if (!o.flow_lone_held_dashes) return false;
-    // Where the pixels are there to ask (flow_lone_pixel_dashes): no light of a dash at the place beside the
+    if (!o.ablation.flow_lone_held_dashes) return false;
+    // Where the pixels are there to ask (LinkTrails given the scan): no light of a dash at the place beside the
     // holder's (a foreign image by the empty place before the run) is the run's end; a dash's light there
     // (merged with the holder) is the run's own dash as above.
     const DashInPixels seen = DashInScan(c, all, path, last_dash_s - 30.0 * m, dash_length, dash_flux);
@@ -342,7 +342,7 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   // (A trail entering the format shows its separators and at most the end of its run: one dash besides the
   // seed suffices where its siblings' absence gave the number.)
   const int other_dashes = off_format ? 1 : kOtherDashes;
-  return static_cast<int>(out->taken.size()) >= o.flow_min_images && cover.other_dashes >= other_dashes &&
+  return static_cast<int>(out->taken.size()) >= o.tuning.flow_min_images && cover.other_dashes >= other_dashes &&
          cover.durations >= DurationsRequired(c, path, trail, ex[best->exposure].mid_s - ex[first_dot].mid_s);
 }
 

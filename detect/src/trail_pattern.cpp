@@ -34,7 +34,7 @@ bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int referenc
         if (nb < 0 || nb >= static_cast<int>(ex.size())) continue;
         const double dt = ex[nb].mid_s - ex[j].mid_s;
         const PixelPoint q{c.p[dash].x_px + ux * rate * dt, c.p[dash].y_px + uy * rate * dt};
-        const double tol = std::max(o.min_tolerance_px, o.match_tolerance * std::abs(dt) * rate);
+        const double tol = std::max(o.tuning.min_tolerance_px, o.match_tolerance * std::abs(dt) * rate);
         int count = 0, image = -1;
         all.Near(q.x_px, q.y_px, tol, [&](int i) {
           if (i == dash || !c.usable[i] || (excluded && excluded(i)) ||
@@ -53,7 +53,7 @@ bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int referenc
       spec.seed = {{std::min(j, nb_exposure), nb_exposure < j ? nb_image : dash},
                    {std::max(j, nb_exposure), nb_exposure < j ? dash : nb_image}};
       spec.flux_per_s = flux_per_s;
-      spec.max_missed_in_row = o.max_missed_in_row;
+      spec.max_missed_in_row = o.tuning.max_missed_in_row;
       spec.excluded = excluded;
       spec.first = std::max(j, nb_exposure) + 1;
       spec.step = 1;
@@ -62,14 +62,14 @@ bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int referenc
       spec.first = std::min(j, nb_exposure) - 1;
       spec.step = -1;
       const Growth both = Grow(c, all, spec);
-      if (static_cast<int>(both.taken.size()) < 1 + o.min_exposures_after_run) continue;
+      if (static_cast<int>(both.taken.size()) < 1 + o.tuning.min_exposures_after_run) continue;
       // The seed's flux must be the trail's: the median flux per second of the other images taken.
       std::vector<double> per_s;
       for (const auto& [k, i] : both.taken)
         if (i != dash) per_s.push_back(c.images[i].flux_dn / ex[k].duration_s);
       std::nth_element(per_s.begin(), per_s.begin() + per_s.size() / 2, per_s.end());
       const double median_per_s = per_s[per_s.size() / 2];
-      if (std::abs(flux_per_s - median_per_s) > o.run_flux_tolerance * median_per_s + 4.0 * d.sigma_flux_dn / ex[j].duration_s)
+      if (std::abs(flux_per_s - median_per_s) > o.tuning.run_flux_tolerance * median_per_s + 4.0 * d.sigma_flux_dn / ex[j].duration_s)
         continue;
       if (++found > 1) return false;  // two readings of one dash: neither is trusted
       best.taken = both.taken;
@@ -95,7 +95,7 @@ bool RunRefutes(const Context& c, const Grid& all, const Track& track, const std
     if (std::any_of(as_u.begin(), as_u.end(), [&](const std::pair<int, int>& ji) { return ji.first == j; })) continue;
     const PixelPoint q = track.At(ex[j].mid_s);
     if (!Inside(o, q, o.edge_margin_px)) continue;
-    const double tol_px = o.sibling_tolerance_px + o.sibling_tolerance_fraction * Dist(q, first);
+    const double tol_px = o.tuning.sibling_tolerance_px + o.tuning.sibling_tolerance_fraction * Dist(q, first);
     const PixelPoint v = track.VelocityAt(ex[j].mid_s);
     if (DashPlaceEmpty(c, all, q, v, flux_per_s * ex[j].duration_s, ex[j].duration_s, tol_px)) return true;
   }
@@ -146,7 +146,7 @@ int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, 
     const PixelPoint v = track.VelocityAt(0.5 * (ts.front() + ts.back()));
     const double rate = std::hypot(v.x_px, v.y_px);
     const double gap_s = trails > 1 ? c.per_trail[1].front().mid_s - c.per_trail[0].back().mid_s : 0.0;
-    const double far_tol_px = o.sibling_tolerance_px + o.sibling_tolerance_fraction * rate * (gap_s + o.sibling_window_s);
+    const double far_tol_px = o.tuning.sibling_tolerance_px + o.tuning.sibling_tolerance_fraction * rate * (gap_s + o.tuning.sibling_window_s);
     if (10.0 * rate < 2.0 * far_tol_px) return -1;
     bool grows = false;
     for (int s : {u - 1, u + 1}) {
@@ -154,7 +154,7 @@ int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, 
       std::vector<std::pair<int, int>> sibling;
       const Growth g = GrowSibling(c, all, as_u, u, s, pt.flux_per_s, [&](int i) { return other_number(i, s); }, &sibling);
       // (evidence only: a crowded clump offers a piece near almost any prediction)
-      if (g.after_run < o.min_exposures_after_run || EvidenceCount(c, sibling) < o.min_exposures_after_run) continue;
+      if (g.after_run < o.tuning.min_exposures_after_run || EvidenceCount(c, sibling) < o.tuning.min_exposures_after_run) continue;
       // The sibling's own track: its images on it to their precision, and on one arc with the trail's.
       std::vector<double> st;
       std::vector<PixelPoint> sp;
@@ -165,7 +165,7 @@ int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, 
       std::vector<double> residual_px;
       for (size_t k = 0; k < st.size(); ++k) residual_px.push_back(Dist(sibling_track.At(st[k]), sp[k]));
       std::nth_element(residual_px.begin(), residual_px.begin() + residual_px.size() / 2, residual_px.end());
-      if (residual_px[residual_px.size() / 2] > std::max(o.max_median_residual_px, o.max_median_residual_fwhm * o.psf_fwhm_px))
+      if (residual_px[residual_px.size() / 2] > std::max(o.tuning.max_median_residual_px, o.tuning.max_median_residual_fwhm * o.psf_fwhm_px))
         continue;
       if (!(s < u ? OnOneArc(o, sibling_track, st.back(), track, ts.front()) : OnOneArc(o, track, ts.back(), sibling_track, st.front())))
         continue;

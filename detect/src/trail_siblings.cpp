@@ -51,7 +51,7 @@ bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, cons
 
 bool OnOneArc(const TrailOptions& o, const Track& a, double a1_s, const Track& b, double b0_s) {
   const PixelPoint pa = a.At(b0_s), pb = b.At(b0_s), qa = a.At(a1_s), qb = b.At(a1_s);
-  const double tol = o.join_tolerance_px + o.join_tolerance_fraction * Dist(pa, qa);
+  const double tol = o.join_tolerance_px + o.tuning.join_tolerance_fraction * Dist(pa, qa);
   return Dist(pa, pb) <= tol && Dist(qa, qb) <= tol;
 }
 
@@ -70,10 +70,10 @@ SiblingEvidence SiblingsOf(const Context& c, const Grid& all, const Track& track
       // Leading dashes are 30 s apart, the shift between adjacent trail numbers: under a wrong number the
       // prediction lands on the sibling's neighbouring dash. They are not evidence.
       if (e.kind == ExposureKind::kDash && e.group == 0) continue;
-      if (std::abs(e.mid_s - te) > gap_s + o.sibling_window_s) continue;
+      if (std::abs(e.mid_s - te) > gap_s + o.tuning.sibling_window_s) continue;
       const PixelPoint q = track.At(e.mid_s);
       if (!Inside(o, q, 0.0)) continue;
-      const double tol = o.sibling_tolerance_px + o.sibling_tolerance_fraction * Dist(q, end);
+      const double tol = o.tuning.sibling_tolerance_px + o.tuning.sibling_tolerance_fraction * Dist(q, end);
       const PixelPoint v = track.VelocityAt(e.mid_s);
       bool hit = false;
       all.Near(q.x_px, q.y_px, tol, [&](int i) {

@@ -208,8 +208,9 @@ StageOutput RunStarStage(const DetectContext& context) {
     const TrailImage& t = linked.images[i];
     MeasuredPoint row = StarRow(stars[i]);
     if (!t.assigned) {
-      if (t.reason != "not_star") row.flags.push_back("trail:" + t.reason);
-      unassigned[t.reason]++;
+      const std::string why = TrailReasonName(t.reason);
+      if (t.reason != TrailReason::kNotStar) row.flags.push_back("trail:" + why);
+      unassigned[why]++;
       out.rows.push_back(std::move(row));
       continue;
     }
@@ -221,7 +222,10 @@ StageOutput RunStarStage(const DetectContext& context) {
   long decoded = 0;
   nlohmann::json by_step = nlohmann::json::object();
   for (const TrailChain& c : linked.chains)
-    if (c.trail > 0) ++decoded, by_step[c.decoded_by] = by_step.value(c.decoded_by, 0L) + 1;
+    if (c.trail > 0) {
+      const char* step = TrailStepName(c.decoded_by);
+      ++decoded, by_step[step] = by_step.value(step, 0L) + 1;
+    }
   out.summary["trails"] = {{"decoded_trails", decoded},
                            {"refused_runs", static_cast<long>(linked.chains.size()) - decoded},
                            {"decoded_trails_by_step", by_step},

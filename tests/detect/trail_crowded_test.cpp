@@ -242,9 +242,9 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
     const TrailImage& ti = r.images[k];
     if (!ti.assigned || !ti.flow_checked) continue;
     ++flow_checked;
-    EXPECT_LE(ti.residual_px, field->options.flow_tolerance_px + field->options.flow_tolerance_fraction * 6000.0);
+    EXPECT_LE(ti.residual_px, field->options.flow_tolerance_px + field->options.tuning.flow_tolerance_fraction * 6000.0);
     EXPECT_GE(ti.sigma_refined_x_px, field->options.position_floor_px);
-    if (r.chains[ti.chain].decoded_by == "flow_fill") continue;  // a star's missing trail: no track of its own
+    if (r.chains[ti.chain].decoded_by == TrailStep::kFlowFill) continue;  // a star's missing trail: no track of its own
     const auto& [t0, t1] = track_span_s.at(ti.chain);
     inside_gaps += ti.mid_s > t0 && ti.mid_s < t1;
   }
@@ -264,42 +264,42 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   // Without the crowded-field checks the same field is tagged wrongly: the test can fail.
   const Score loose = rescored("checks off", [](TrailOptions* o) {
     o->flux_tolerance = 0;
-    o->run_flux_tolerance = 1e9;
-    o->tight_tolerance_px = 1e9;
-    o->crowd_radius_fwhm = 0;
-    o->max_leverage = 1.0;
-    o->max_median_residual_px = 1e9;
-    o->clean_radius_spacings = 0;
+    o->tuning.run_flux_tolerance = 1e9;
+    o->tuning.tight_tolerance_px = 1e9;
+    o->tuning.crowd_radius_fwhm = 0;
+    o->tuning.max_leverage = 1.0;
+    o->tuning.max_median_residual_px = 1e9;
+    o->tuning.clean_radius_spacings = 0;
   });
   EXPECT_GT(loose.wrong, 0);
   // Without the sibling growth, the separator seeds and the plate's flow (docs/trails.md, "Hidden runs",
   // "The plate's flow") fewer are found; without the flow alone, fewer too; without the lone trails numbered
   // by their runs along the flow ("The plate's flow" 4), fewer.
   const Score runs_only = rescored("leading runs only", [](TrailOptions* o) {
-    o->grow_siblings = o->pattern_trails = o->flow_trails = false;
+    o->ablation.grow_siblings = o->ablation.pattern_trails = o->ablation.flow_trails = false;
   });
   EXPECT_EQ(runs_only.wrong, 0);
   EXPECT_LT(runs_only.right, score.right * 9 / 10);
-  const Score no_flow = rescored("without the flow", [](TrailOptions* o) { o->flow_trails = false; });
+  const Score no_flow = rescored("without the flow", [](TrailOptions* o) { o->ablation.flow_trails = false; });
   EXPECT_EQ(no_flow.wrong, 0);
   EXPECT_LT(no_flow.right, score.right);
-  const Score no_lone = rescored("without lone trails", [](TrailOptions* o) { o->flow_lone_trails = false; });
+  const Score no_lone = rescored("without lone trails", [](TrailOptions* o) { o->ablation.flow_lone_trails = false; });
   EXPECT_EQ(no_lone.wrong, 0);
   EXPECT_LT(no_lone.right, score.right);
   // Without the decoded trails filled along the flow, fewer (docs/trails.md).
   const Score no_ends = rescored("without the trails filled along the flow",
-                                 [](TrailOptions* o) { o->flow_fills_trails = false; });
+                                 [](TrailOptions* o) { o->ablation.flow_fills_trails = false; });
   EXPECT_EQ(no_ends.wrong, 0);
   EXPECT_LT(no_ends.right, score.right);
   // Nor without a decoded star's missing trails filled along the flow.
   const Score no_siblings = rescored("without the stars' missing trails filled along the flow",
-                                     [](TrailOptions* o) { o->flow_fills_siblings = false; });
+                                     [](TrailOptions* o) { o->ablation.flow_fills_siblings = false; });
   EXPECT_EQ(no_siblings.wrong, 0);
   EXPECT_LT(no_siblings.right, score.right);
   // Without the crowded readings (a reading's dashless second trail at its first trail's offset, the seed's
   // flux shown by few dashes: docs/trails.md, "The plate's flow" 3), fewer.
   const Score no_crowded = rescored("without the crowded readings",
-                                    [](TrailOptions* o) { o->flow_crowded_readings = false; });
+                                    [](TrailOptions* o) { o->ablation.flow_crowded_readings = false; });
   EXPECT_EQ(no_crowded.wrong, 0);
   EXPECT_LT(no_crowded.right, score.right);
   // Trails joined to a sibling only (require_joined: no lone or entering trails), fewer, none wrong.
@@ -318,7 +318,7 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
     if (*t.dot == leading + 1) d.flags |= kStarBlended, d.flux_dn *= 1.6;
   }
   const auto [blended, not_blended] = WithAndWithout("blended seeds", *field, field->options,
-                                                     [](TrailOptions* o) { o->flow_blended_seeds = false; });
+                                                     [](TrailOptions* o) { o->ablation.flow_blended_seeds = false; });
   EXPECT_GT(blended.right, not_blended.right);
 }
 
@@ -340,9 +340,9 @@ TEST(TrailCrowded, LoneTrailsAreNumberedByTheirRunsAlongTheFlow) {
   // trails' rule reads their absence as evidence against the true number (1028 wrong tags), so it is off here
   // (TrailsEnteringTheFormatAreNumberedByTheirSiblingsAbsence keeps every trail on a smaller format).
   TrailOptions options = field->options;
-  options.flow_entering_trails = false;
+  options.ablation.flow_entering_trails = false;
   const auto [score, before] =
-      WithAndWithout("lone trails", *field, options, [](TrailOptions* o) { o->flow_lone_trails = false; });
+      WithAndWithout("lone trails", *field, options, [](TrailOptions* o) { o->ablation.flow_lone_trails = false; });
   EXPECT_GT(score.clean_dots, 1000);
   EXPECT_GT(score.right, before.right + score.clean_dots / 20);  // figures in docs/trails.md
   // The dash before the last of every run of 3 dashes or more measured wrong (as merged with a neighbour:
@@ -356,7 +356,7 @@ TEST(TrailCrowded, LoneTrailsAreNumberedByTheirRunsAlongTheFlow) {
     d.flux_dn *= 1.5, d.length_px *= 1.6;
   }
   const auto [held, not_held] =
-      WithAndWithout("held dashes", *field, options, [](TrailOptions* o) { o->flow_lone_held_dashes = false; });
+      WithAndWithout("held dashes", *field, options, [](TrailOptions* o) { o->ablation.flow_lone_held_dashes = false; });
   EXPECT_GT(held.right, not_held.right + held.clean_dots / 50);
 }
 
@@ -376,21 +376,21 @@ TEST(TrailCrowded, TrailsEnteringTheFormatAreNumberedByTheirSiblingsAbsence) {
   TrailOptions options = field->options;
   options.exposed_outline_px = {{lo_px, lo_px}, {hi_px, lo_px}, {hi_px, hi_px}, {lo_px, hi_px}};
   const auto [score, before] =
-      WithAndWithout("entering trails", *field, options, [](TrailOptions* o) { o->flow_entering_trails = false; });
+      WithAndWithout("entering trails", *field, options, [](TrailOptions* o) { o->ablation.flow_entering_trails = false; });
   EXPECT_GT(score.clean_dots, 1000);
   EXPECT_GT(score.right, before.right + score.clean_dots / 25);  // figures in docs/trails.md
   // An entering trail may show its last dot groups only, and trails leave this format too, some after their
   // run and one or two dot groups: such a lone trail needs only the exposure durations it shows on the format
   // (docs/trails.md, "Trails cut by the format's edge").
   const auto [cut, cut_before] =
-      WithAndWithout("cut trails", *field, options, [](TrailOptions* o) { o->flow_cut_trails = false; });
+      WithAndWithout("cut trails", *field, options, [](TrailOptions* o) { o->ablation.flow_cut_trails = false; });
   EXPECT_GT(cut.right, cut_before.right);
   // A cloud (or a shutter fault) during the last trail: no star's T4 anywhere. Read as absent, it would
   // refute every entering T3 and leave T4 standing; a trail's place counts only where that trail was exposed.
   const auto clouded = BuildField(FieldSpec(7.0), [&](const MeasuredPoint& t) { return inside(t) && t.trail != "T4"; });
   const auto [cloud, cloud_before] =
       WithAndWithout("entering trails, no T4", *clouded, options,
-                     [](TrailOptions* o) { o->flow_entering_trails = false; });
+                     [](TrailOptions* o) { o->ablation.flow_entering_trails = false; });
   EXPECT_GE(cloud.right, cloud_before.right);
 }
 
@@ -420,15 +420,15 @@ TEST(TrailCrowded, AStarsSparseTrailIsFilledAlongTheFlowFromItsOtherTrails) {
       const TrailImage& ti = r.images[k];
       right += ti.assigned && ti.kind == ExposureKind::kDot && ti.trail == 3 && ti.dot_index == *t.dot &&
                std::abs(SecondsAfter0530(t.mid_time_utc) - ti.mid_s) < 0.0015;
-      if (ti.assigned && ti.chain >= 0 && r.chains[ti.chain].decoded_by == "flow_fill") {
+      if (ti.assigned && ti.chain >= 0 && r.chains[ti.chain].decoded_by == TrailStep::kFlowFill) {
         EXPECT_TRUE(ti.flow_checked);
-        EXPECT_LE(ti.residual_px, field->options.flow_tolerance_px + field->options.flow_tolerance_fraction * 6000.0);
+        EXPECT_LE(ti.residual_px, field->options.flow_tolerance_px + field->options.tuning.flow_tolerance_fraction * 6000.0);
       }
     }
     return right;
   };
   TrailOptions without = field->options;
-  without.flow_fills_siblings = false;
+  without.ablation.flow_fills_siblings = false;
   const TrailLinkResult with_r = LinkTrails(field->found, DutyCycleScheduleOptions{}, field->options);
   const TrailLinkResult without_r = LinkTrails(field->found, DutyCycleScheduleOptions{}, without);
   long dots = 0;
@@ -463,7 +463,7 @@ TEST(TrailCrowded, TrailsWithoutTheirLeadingRunAreDecodedFromTheirSiblings) {
     const TrailLinkResult r = LinkTrails(field->found, DutyCycleScheduleOptions{}, field->options);
     const Score score = ScoreField(*field, r, true);
     TrailOptions runs_only = field->options;
-    runs_only.grow_siblings = runs_only.pattern_trails = runs_only.flow_trails = false;
+    runs_only.ablation.grow_siblings = runs_only.ablation.pattern_trails = runs_only.ablation.flow_trails = false;
     const Score before = ScoreField(*field, LinkTrails(field->found, DutyCycleScheduleOptions{}, runs_only), false);
     std::printf("[no runs: %s] %ld unmerged dots of whole trails, %ld tagged right (leading runs only: %ld), %ld wrong; %s\n",
                 all_trails ? "every trail" : "T2, T3", score.clean_dots, score.right, before.right, score.wrong,

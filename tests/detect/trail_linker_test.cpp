@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <set>
@@ -45,11 +46,21 @@ TEST(TrailLinker, OptionsAreChecked) {
   o.match_tolerance = -1;
   EXPECT_THROW(LinkTrails({}, DutyCycleScheduleOptions{}, o), Error);
   TrailOptions flow;
-  flow.flow_min_sibling_images = 5;  // the flow's trails need enough images for the sidereal fit
+  flow.tuning.flow_min_sibling_images = 5;  // the flow's trails need enough images for the sidereal fit
   EXPECT_THROW(LinkTrails({}, DutyCycleScheduleOptions{}, flow), Error);
   flow = TrailOptions{};
   flow.flow_tolerance_px = 0;
   EXPECT_THROW(LinkTrails({}, DutyCycleScheduleOptions{}, flow), Error);
+  // The tuning is checked too, also where it was not before (#27: every setting checked).
+  for (const auto& spoil : std::vector<std::function<void(TrailOptions*)>>{
+           [](TrailOptions* t) { t->tuning.max_leverage = 0.0; },
+           [](TrailOptions* t) { t->tuning.tight_tolerance_px = -0.1; },
+           [](TrailOptions* t) { t->tuning.motion_radius_px = 0.0; },
+           [](TrailOptions* t) { t->flux_tolerance = -0.5; }}) {
+    TrailOptions bad;
+    spoil(&bad);
+    EXPECT_THROW(LinkTrails({}, DutyCycleScheduleOptions{}, bad), Error);
+  }
   EXPECT_TRUE(LinkTrails({}, DutyCycleScheduleOptions{}).images.empty());
 }
 
@@ -224,7 +235,7 @@ TEST(TrailLinker, DecodesTheTrailsOfASimulatedOrbigonPlate) {
   for (const TrailStar& s : r.stars) joined += s.chains.size() > 1;
   std::map<std::string, long> reasons;
   for (const TrailImage& ti : r.images)
-    if (!ti.assigned) reasons[ti.reason]++;
+    if (!ti.assigned) reasons[TrailReasonName(ti.reason)]++;
   std::string why;
   for (const auto& [k, n] : reasons) why += k + "=" + std::to_string(n) + " ";
   const double coverage = truth_dots > 0 ? static_cast<double>(good_dots.size()) / truth_dots : 0.0;
@@ -394,7 +405,7 @@ TEST(TrailLinker, AnUnassignedDetectionAtATracksDotIsRemeasuredAsIt) {
     TrailImage& ti = r.images[i];
     if (!ti.assigned || ti.bad || ti.kind != ExposureKind::kDot || ++n % 4) continue;
     ti = TrailImage{};
-    ti.reason = "unlinked";
+    ti.reason = TrailReason::kUnlinked;
     untagged.insert(static_cast<int>(i));
   }
   ASSERT_GE(untagged.size(), 50u);
@@ -653,7 +664,7 @@ TEST(TrailLinker, DecodesTheTrueImagesOfAWholePlate) {
   for (const auto& [chain, stars] : chain_stars) EXPECT_EQ(stars.size(), 1u) << "chain " << chain;
   std::map<std::string, long> reasons;
   for (const TrailImage& ti : r.images)
-    if (!ti.assigned) reasons[ti.reason]++;
+    if (!ti.assigned) reasons[TrailReasonName(ti.reason)]++;
   std::string why;
   for (const auto& [k, c] : reasons) why += k + "=" + std::to_string(c) + " ";
   std::printf("[true images] %zu detections, %zu chains, %ld truth dots, %ld present on complete trails, %ld of them "

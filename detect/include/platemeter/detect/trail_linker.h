@@ -65,100 +65,41 @@
 
 namespace platemeter {
 
+// Why an image is not tagged (or, bad_fit, tagged but flagged bad); why a run or trail was refused. The
+// measurement file writes the name (TrailReasonName) as the image's `trail:<name>` flag (docs/trails.md).
+enum class TrailReason {
+  kNone,
+  kNotStar,                  // not a measured star image (rejected, a defect)
+  kUnlinked,                 // no trail took it
+  kAtEdge,                   // its run may continue off the scan or the format
+  kImageBeforeRun,           // an image where a dash before the run would be
+  kShortPattern,             // too few exposures after the run in either direction
+  kAmbiguous,                // both directions grow
+  kContested,                // taken by two trails
+  kLeadingDashesIncomplete,  // a run of a length no trail has
+  kDoubtfulNumber,           // two trails meet under numbers other than their own
+  kLoneTrail,                // nothing else of its star decoded to confirm its number
+  kPoorTrack,                // the track fit failed or kept too few images
+  kUnconfirmed,              // no sibling or clean field confirms its number
+  kRunFlux,                  // the run's dashes' fluxes differ
+  kOffTrack,                 // off its track amid other stars' images
+  kUnverified,               // the track merely follows it (leverage)
+  kBlended,                  // a leading dash whose flux is not the run's
+  kUnjoined,                 // a grown sibling that does not join its source
+  kUnresolvedRun,            // a slow star's run whose dashes merge
+  kOffFlow,                  // a trail off the plate's flow
+  kBadFit,                   // tagged, its position an outlier of the track fit
+};
+const char* TrailReasonName(TrailReason reason);  // "not_star", ...; "" for kNone
+
+// The step that decoded a trail.
+enum class TrailStep { kRun, kSibling, kSeparators, kFlow, kLone, kFlowFill };
+const char* TrailStepName(TrailStep step);  // "run", "sibling", "separators", "flow", "lone", "flow_fill"
+
 struct TrailOptions {
-  double run_spacing_tolerance = 0.2;  // fraction; leading dashes' spacings may differ from their mean by this
-  double max_run_bend_deg = 10.0;      // deg; largest turn between consecutive leading dashes
-  double max_dash_spacing_px = 200.0;  // px; longest spacing of two leading dashes (30 s x the fastest rate)
-  double match_tolerance = 0.25;       // fraction of the smaller neighbouring exposure spacing (px) a taken image
-                                       // may lie off its predicted position
-  double min_tolerance_px = 1.5;       // px; the tolerance never drops below this
-  int min_exposures_after_run = 11;    // a trail must take this many exposures past its leading run
-  int max_missed_in_row = 12;          // growth stops after this many consecutive exposures without an image
-  double min_elongated_exposure_s = 5.0;  // s; an image flagged elongated only matches exposures at least this long
-  double dash_length_tolerance = 0.3;  // fraction; an image with a measured length_px must match the exposure's
-                                       // duration x rate within this (plus psf_fwhm_px), when length_px > 0
+  // The plate (the caller knows it).
   double psf_fwhm_px = 2.5;            // px; the PSF's FWHM (length comparisons: a point image measures 0)
-  int track_degree = 3;                // degree of the fitted track polynomials (3: the arc's curvature over 25 min)
-  double bad_sigma = 5.0;              // an image whose residual exceeds this many sigmas (the sigma scaled by the
-                                       // fit's robust spread when that exceeds 1) is flagged bad and left out
-  double min_bad_px = 0.25;            // px; residuals below this are never bad (model floor)
-  double position_floor_px = 0.02;     // px; added in quadrature to the images' formal sigmas (weights)
-  double join_tolerance_px = 1.0;      // px; trails are joined into stars when their tracks meet within this
-  double join_tolerance_fraction = 0.005;  // plus this fraction of the extrapolation distance (a 30 s error in
-                                       // timing, one trail number off, misses by 30 s x the rate: 4-15 px)
-  bool require_joined = false;         // true: a trail is tagged only when joined to another trail of its star
-                                       // (which confirms its number); lone trails stay unassigned ("lone_trail")
-  // Crowded fields (docs/trails.md, "Crowded fields"): what a trail must prove before it is tagged.
-  double max_median_residual_px = 0.15;  // px; a grown trail whose good images' median track residual exceeds this
-                                       // (or max_median_residual_fwhm x psf_fwhm_px) took other stars' images: refused
-  double max_median_residual_fwhm = 0.08;
-  double run_flux_tolerance = 0.3;     // fraction; a run's dashes (equal exposures) must have equal fluxes within this
-                                       // (plus 4 sigma): a stray dash of another star would change the count N
-  double flux_tolerance = 0.3;         // fraction; an image taken as exposure e must hold the run's flux per second x
-                                       // e's duration within this (plus 4 sigma); 0: fluxes not compared
-  double crowd_radius_fwhm = 10.0;     // a bad image with another star's image within this many FWHM is not tagged
-                                       // ("off_track": likely that star's); alone it stays tagged, flagged bad
-  double tight_tolerance_px = 0.3;     // px; with other images near (crowded), an image off the established track by
-                                       // more than this (and 5 sigma of the prediction) is not taken / not tagged
-  double max_leverage = 0.8;           // an image the track follows this much (hat-matrix diagonal) is not tagged
-  int min_sibling_images = 5;          // raw images on a sibling trail's predicted exposures that confirm a number
-  double sibling_window_s = 600.0;     // s; sibling exposures compared: within the break plus this of the trail's end
-  double sibling_tolerance_px = 0.5;   // px; a sibling exposure's image must lie within this plus
-  double sibling_tolerance_fraction = 0.002;  // this fraction of the extrapolation distance (correct joins: 0.01-0.45 px;
-                                       // under a wrong number the prediction lands 10 s x the rate off a sibling's dot)
-  double clean_radius_spacings = 1.0;  // a trail confirmed by no sibling is kept only when no other image lies within
-                                       // this many dash spacings of the position one dash before its run
-  // Siblings grown from decoded trails (docs/trails.md, "Siblings"): a trail whose run was not found
-  // is grown from its decoded neighbour's track across the break.
-  bool grow_siblings = true;
-  double sibling_growth_window_s = 1500.0;  // s; the growing track is fitted to the images within this
-  // Trails grown from their separator dashes and numbered by their siblings' raw images (docs/trails.md,
-  // "Separators"): trails whose run was not found and that no decoded sibling reaches.
-  bool pattern_trails = true;
-  double motion_radius_px = 400.0;     // px; decoded trails within this give the local direction of motion
-  bool require_motion = false;         // true: no separator seed where that direction is unknown
-  // The plate's flow (docs/trails.md, "The plate's flow"): one motion field for every star, fitted to the
-  // decoded trails; stars decoded from any of their dashes by the whole program's timing, decoded stars'
-  // missing trails found along it.
-  bool flow_trails = true;
-  int flow_degree = 6;                 // polynomial degree of the velocity field (the Orbigon's distortion needs 6)
-  double flow_tolerance_px = 0.4;      // px; an image predicted by the flow must lie within this plus
-  double flow_tolerance_fraction = 2e-4;  // this fraction of its distance from the image it was predicted from
-  int flow_min_images = 8;             // images a trail found along the flow must hold (a new star: two such trails)
-  int flow_min_sibling_images = 6;     // images a decoded star's missing trail found along the flow must hold
-  bool flow_lone_trails = true;        // a star with one trail on the format numbered by its run found along the
-                                       // flow (not with require_joined: nothing else confirms the number)
-  bool flow_fills_trails = true;       // each decoded trail's exposures without an image filled along the flow
-                                       // (beyond the growth's or the track's reach): one compatible image within
-                                       // flow_tolerance_px (in a gap inside: also within tight_tolerance_px of
-                                       // the track), tagged at its measured position
-  bool flow_fills_siblings = true;     // a decoded star's trails still missing filled the same way, exposure by
-                                       // exposure from its trail nearest in time (at least 3 images)
-  bool flow_entering_trails = true;    // such a trail entering the format (its run beyond it) numbered by its other
-                                       // trails' absence: the one number under which none of them lies on the
-                                       // format where nothing is (docs/trails.md, "Trails entering the format")
-  bool flow_cut_trails = true;         // such a trail cut by the format's edge (leaving it after its first dot
-                                       // groups, entering it for its last) needs only the exposure durations it
-                                       // shows on the format, at least 3, instead of 4 (docs/trails.md, "Trails
-                                       // cut by the format's edge")
-  bool flow_crowded_readings = true;   // where a crowd hides a star's dashes (not a slow star's): a reading's
-                                       // second trail needs no dash when its images sit at its first trail's
-                                       // offset (within 0.15 px) with 5 dots of 2 groups; the seed's flux is
-                                       // shown by 5 other dashes and 3 durations, or 1 dash and 5 durations
-                                       // (4 with the images' flux per second the seed's) (docs/trails.md,
-                                       // "The plate's flow" 3)
-  bool flow_blended_seeds = true;      // a dash fitted jointly with a neighbour (blended: its flux is not the
-                                       // star's) seeds too (not a slow star's): each reading takes the star's
-                                       // flux per second from its own images, then needs the usual evidence
-                                       // (docs/trails.md, "The plate's flow" 3)
-  bool flow_lone_held_dashes = true;  // a lone trail's run goes on over a dash's place held by an image not
-                                       // measured as that dash (merged, cut, shaped wrong) where the place
-                                       // before it holds one of the run's dashes (docs/trails.md, "The
-                                       // plate's flow" 4)
-  bool flow_lone_pixel_dashes = true;  // where LinkTrails is given the scan, a lone run's places are asked of
-                                       // its pixels too (the dash's thirds fitted: dash_in_pixels.h): a held
-                                       // place with no dash's light ends the run, one with it continues it,
-                                       // and a place the detections leave empty must not show a dash
+  double max_dash_spacing_px = 200.0;  // px; longest spacing of two leading dashes (30 s x the fastest rate)
   // The scanned area (px). A trail whose leading run starts near its edge may have lost dashes
   // beyond it (trail 3 minus one dash looks like a complete trail 2): the position one dash before
   // the run must lie inside by edge_margin_px, else the run is refused. Unset (max <= min):
@@ -169,9 +110,106 @@ struct TrailOptions {
   // The exposed format's outline (a convex polygon, px; a plate is exposed only inside its format, often
   // smaller than the scan): the same checks as the scanned area. Empty: the scanned area alone.
   std::vector<PixelPoint> exposed_outline_px;
-  double max_link_px = 40.0;           // px; UNUSED (the growth predicts along the track); kept so that older
-                                       // callers compile: set max_dash_spacing_px (30 s x the fastest rate) instead
-  bool Check(std::string* why) const;
+  // What the user decides.
+  bool require_joined = false;         // true: a trail is tagged only when joined to another trail of its star
+                                       // (which confirms its number); lone trails stay unassigned ("lone_trail")
+  // Tolerances a plate may need changed (its measuring precision, photometry, distortion).
+  double match_tolerance = 0.25;       // fraction of the smaller neighbouring exposure spacing (px) a taken image
+                                       // may lie off its predicted position
+  double flux_tolerance = 0.3;         // fraction; an image taken as exposure e must hold the run's flux per second x
+                                       // e's duration within this (plus 4 sigma); 0: fluxes not compared
+  double position_floor_px = 0.02;     // px; added in quadrature to the images' formal sigmas (weights)
+  int track_degree = 3;                // degree of the fitted track polynomials (3: the arc's curvature over 25 min)
+  double join_tolerance_px = 1.0;      // px; trails are joined into stars when their tracks meet within this
+                                       // (plus tuning.join_tolerance_fraction of the extrapolation distance)
+  double flow_tolerance_px = 0.4;      // px; an image predicted by the plate's flow must lie within this (plus
+                                       // tuning.flow_tolerance_fraction of its distance from the image it was
+                                       // predicted from)
+
+  // The decoder's internal constants (docs/trails.md): each comment says what the value rests on. Tests and
+  // benchmarks may change them; a plate should not need to.
+  struct Tuning {
+    double run_spacing_tolerance = 0.2;  // fraction; leading dashes' spacings may differ from their mean by this
+    double max_run_bend_deg = 10.0;      // deg; largest turn between consecutive leading dashes
+    double min_tolerance_px = 1.5;       // px; the match tolerance never drops below this
+    int min_exposures_after_run = 11;    // a trail must take this many exposures past its leading run
+    int max_missed_in_row = 12;          // growth stops after this many consecutive exposures without an image
+    double min_elongated_exposure_s = 5.0;  // s; an image flagged elongated only matches exposures this long
+    double dash_length_tolerance = 0.3;  // fraction; an image with a measured length_px must match the exposure's
+                                         // duration x rate within this (plus psf_fwhm_px), when length_px > 0
+    double bad_sigma = 5.0;              // an image whose residual exceeds this many sigmas (the sigma scaled by the
+                                         // fit's robust spread when that exceeds 1) is flagged bad and left out
+    double min_bad_px = 0.25;            // px; residuals below this are never bad (model floor)
+    double join_tolerance_fraction = 0.005;  // of the extrapolation distance (a 30 s error in timing, one trail
+                                         // number off, misses by 30 s x the rate: 4-15 px)
+    // Crowded fields (docs/trails.md, "Crowded fields"): what a trail must prove before it is tagged.
+    double max_median_residual_px = 0.15;  // px; a grown trail whose good images' median track residual exceeds
+                                         // this (or max_median_residual_fwhm x psf_fwhm_px) took other stars'
+                                         // images: refused
+    double max_median_residual_fwhm = 0.08;
+    double run_flux_tolerance = 0.3;     // fraction; a run's dashes (equal exposures) must have equal fluxes within
+                                         // this (plus 4 sigma): a stray dash of another star would change N
+    double crowd_radius_fwhm = 10.0;     // a bad image with another star's image within this many FWHM is not
+                                         // tagged ("off_track": likely that star's); alone it stays tagged, bad
+    double tight_tolerance_px = 0.3;     // px; with other images near (crowded), an image off the established
+                                         // track by more than this (and 5 sigma of the prediction) is not taken
+    double max_leverage = 0.8;           // an image the track follows this much (hat-matrix diagonal) is not tagged
+    int min_sibling_images = 5;          // raw images on a sibling trail's predicted exposures that confirm a number
+    double sibling_window_s = 600.0;     // s; sibling exposures compared: within the break plus this of its end
+    double sibling_tolerance_px = 0.5;   // px; a sibling exposure's image must lie within this plus
+    double sibling_tolerance_fraction = 0.002;  // this fraction of the extrapolation distance (correct joins:
+                                         // 0.01-0.45 px; under a wrong number the prediction lands 10 s x the
+                                         // rate off a sibling's dot)
+    double clean_radius_spacings = 1.0;  // a trail confirmed by no sibling is kept only when no other image lies
+                                         // within this many dash spacings of the position one dash before its run
+    // Siblings grown from decoded trails (docs/trails.md, "Siblings").
+    double sibling_growth_window_s = 1500.0;  // s; the growing track is fitted to the images within this
+    // Trails grown from their separator dashes (docs/trails.md, "Separators").
+    double motion_radius_px = 400.0;     // px; decoded trails within this give the local direction of motion
+    // The plate's flow (docs/trails.md, "The plate's flow").
+    int flow_degree = 6;                 // polynomial degree of the velocity field (the Orbigon's distortion: 6)
+    double flow_tolerance_fraction = 2e-4;  // of the distance a flow prediction is carried
+    int flow_min_images = 8;             // images a trail found along the flow must hold (a new star: two trails)
+    int flow_min_sibling_images = 6;     // images a decoded star's missing trail found along the flow must hold
+  } tuning;
+
+  // Test-only seam: the decoder's later steps and checks, each switched off by an ablation test that measures
+  // what it adds (tests/detect/trail_crowded_test.cpp). Users leave them on.
+  struct Ablation {
+    bool grow_siblings = true;         // step 5: siblings grown from decoded trails
+    bool pattern_trails = true;        // step 6: trails grown from their separator dashes
+    bool flow_trails = true;           // step 7: the plate's flow (and everything below)
+    bool flow_lone_trails = true;      // a star with one trail on the format numbered by its run found along the
+                                       // flow (not with require_joined: nothing else confirms the number)
+    bool flow_fills_trails = true;     // each decoded trail's exposures without an image filled along the flow
+                                       // (beyond the growth's or the track's reach): one compatible image within
+                                       // flow_tolerance_px (in a gap inside: also within tight_tolerance_px of
+                                       // the track), tagged at its measured position
+    bool flow_fills_siblings = true;   // a decoded star's trails still missing filled the same way, exposure by
+                                       // exposure from its trail nearest in time (at least 3 images)
+    bool flow_entering_trails = true;  // such a trail entering the format (its run beyond it) numbered by its other
+                                       // trails' absence: the one number under which none of them lies on the
+                                       // format where nothing is (docs/trails.md, "Trails entering the format")
+    bool flow_cut_trails = true;       // such a trail cut by the format's edge (leaving it after its first dot
+                                       // groups, entering it for its last) needs only the exposure durations it
+                                       // shows on the format, at least 3, instead of 4 (docs/trails.md, "Trails
+                                       // cut by the format's edge")
+    bool flow_crowded_readings = true;  // where a crowd hides a star's dashes (not a slow star's): a reading's
+                                       // second trail needs no dash when its images sit at its first trail's
+                                       // offset (within 0.15 px) with 5 dots of 2 groups; the seed's flux is
+                                       // shown by 5 other dashes and 3 durations, or 1 dash and 5 durations
+                                       // (4 with the images' flux per second the seed's) (docs/trails.md,
+                                       // "The plate's flow" 3)
+    bool flow_blended_seeds = true;    // a dash fitted jointly with a neighbour (blended: its flux is not the
+                                       // star's) seeds too (not a slow star's): each reading takes the star's
+                                       // flux per second from its own images, then needs the usual evidence
+                                       // (docs/trails.md, "The plate's flow" 3)
+    bool flow_lone_held_dashes = true;  // a lone trail's run goes on over a dash's place held by an image not
+                                       // measured as that dash (merged, cut, shaped wrong) where the place
+                                       // before it holds one of the run's dashes (docs/trails.md, "The
+                                       // plate's flow" 4)
+  } ablation;
+  bool Check(std::string* why) const;  // every setting, tuning included
 };
 
 // The outcome for one input image (same order as the input).
@@ -197,11 +235,7 @@ struct TrailImage {
   double sigma_refined_x_px = 0.0; // px; formal sigma of refined_px (scaled by the fit's reduced chi^2 when > 1;
                                    // flow_checked: the measured sigma with position_floor_px)
   double sigma_refined_y_px = 0.0; // px
-  std::string reason;              // why not assigned: not_star, unlinked, at_edge, image_before_run,
-                                   // short_pattern, ambiguous, contested, leading_dashes_incomplete,
-                                   // doubtful_number, lone_trail, poor_track, unconfirmed, run_flux,
-                                   // off_track, unverified, blended, unjoined, unresolved_run, off_flow;
-                                   // for bad (still assigned) images: bad_fit
+  TrailReason reason = TrailReason::kNone;  // why not assigned; for bad (still assigned) images: kBadFit
 };
 
 // One leading-dash run and the trail grown from it.
@@ -214,9 +248,8 @@ struct TrailChain {
   double rms_px = 0.0;             // rms residual of the track fit (good images)
   int bad_images = 0;              // images flagged bad by the track fit
   int missed_exposures = 0;        // exposures of the trail's span without an image taken
-  std::string reason;              // empty if decoded, else why refused
-  std::string decoded_by;          // the step that found it: run, sibling, separators, flow, lone,
-                                   // flow_fill (no track: its images flow_checked)
+  TrailReason reason = TrailReason::kNone;  // kNone if decoded, else why refused
+  TrailStep decoded_by = TrailStep::kRun;  // the step that found it (kFlowFill: no track, its images flow_checked)
 };
 
 // The trails of one star (same diurnal arc, one after another).
@@ -241,7 +274,7 @@ struct TrailLinkResult {
 // Uses DetectedStar::length_px when set (trail-mode detection). Throws Error
 // for invalid options.
 // `scan`, where given, lets a lone trail's run be counted in the pixels where detections cannot say
-// (flow_lone_pixel_dashes).
+// (docs/trails.md, "The run in the pixels").
 TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCycleScheduleOptions& program,
                            const TrailOptions& options = {}, const ScanPixels* scan = nullptr);
 

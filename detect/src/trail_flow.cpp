@@ -1,6 +1,6 @@
 // Trails decoded by the plate's flow (trail_internal.h; docs/trails.md "The plate's flow"): every
 // star moves with one flow, so one image of a star at a known time predicts all its other images to
-// a fraction of a pixel across the whole plate. A dash read as each dash exposure of the program
+// a fraction of a pixel across the whole plate. A dash read as each exposure it may be (its length)
 // predicts the star's ~130 images; only the right reading finds them in several trails (the trails'
 // different leading-dash counts shift their dot programs 30 s against each other: a wrong reading
 // lines up one trail, or a few dots of each).
@@ -145,7 +145,6 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   const bool slow = 10.0 * speed < kSlowTolerances * o.flow_tolerance_px;
   if (slow && blended) return false;  // (a slow star's wrong readings land near its own images: no flux from them)
   const bool crowded = o.ablation.flow_crowded_readings && !slow;  // the crowd's weaker evidence (below)
-  const double flux_per_s = d.flux_dn / any_dash->duration_s;
   const FlowPath path = PlatePath(c, flow, p);
   const unsigned every_trail = (1u << c.per_trail.size()) - 1u;
   // Decoded: a trail of flow_min_images and a second one holding more dots than a wrong reading lines up
@@ -213,7 +212,10 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   FlowStar best;
   for (const auto& ex : c.per_trail)
     for (const ShutterExposure& e : ex) {
-      if (e.kind != ExposureKind::kDash || !Compatible(c, dash, e, v, 0.0)) continue;
+      // Every exposure the seed may be (by its length): a slow star's 10 s dot measures as its 20 s dash does,
+      // and a reading of it as a dash lines up the star's images one dot late. Only one reading may decode.
+      if (!Compatible(c, dash, e, v, 0.0)) continue;
+      const double flux_per_s = d.flux_dn / e.duration_s;
       // First the reading's own trail (the exposures near the dash): a wrong reading finds little there,
       // and most readings of most dashes stop here.
       const unsigned own = 1u << (e.trail - 1);

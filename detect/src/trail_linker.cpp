@@ -901,7 +901,7 @@ TrailLinkResult LinkTrails(const std::vector<DetectedStar>& images, const DutyCy
   };
   // 7. The plate's flow (trail_flow.cpp): one motion field fitted to every decoded trail's track. A decoded
   // star's missing trails are collected along it (their exposures' times are known); then every unassigned
-  // dash is read as each dash exposure of the program, and a star is decoded when exactly one reading finds
+  // dash is read as each exposure it may be, and a star is decoded when exactly one reading finds
   // its images in two trails or more.
   auto FlowTrails = [&] {
     std::vector<PixelPoint> samples_p, samples_v;

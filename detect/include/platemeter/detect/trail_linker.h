@@ -44,8 +44,8 @@
 //      step 5 again from these;
 //   7. fits the plate's flow (detect/sky_flow.h: every star image moves with
 //      one velocity field) to the decoded tracks; collects decoded stars'
-//      missing trails along it; reads every unassigned dash as each dash
-//      exposure of the program and decodes its star when exactly one reading
+//      missing trails along it; reads every unassigned dash as each exposure
+//      of the program it may be and decodes its star when exactly one reading
 //      lines up its images in two trails (docs/trails.md, "The plate's flow").
 // Crowded fields (docs/trails.md): the run's and every taken image's flux must
 // fit the exposure's duration; an established track takes only images within

@@ -6,6 +6,7 @@
 // and the leading-dash program. "tune" plates may be looked at while changing
 // the decoder; "report" plates are held out: their figures are reported, never
 // tuned on. The benchmark plate (Beltsville, seed 001) is the first.
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -27,34 +28,16 @@ struct TrailPlate {
   double break_s = 480;             // between trails
   std::vector<int> leading_dashes{2, 3, 4, 5};
 
-  double FwhmPx() const;            // the image's FWHM with the scanner's blur, px
-  std::string DashesText() const;   // "2,3,4,5"
+  // The image's FWHM with the scanner's blur, px.
+  double FwhmPx() const { return std::sqrt(fwhm_um * fwhm_um + std::pow(2.3548 * blur_um, 2)) / pixel_um; }
+  std::string DashesText() const {  // "2,3,4,5"
+    std::string text;
+    for (int n : leading_dashes) text += (text.empty() ? "" : ",") + std::to_string(n);
+    return text;
+  }
 };
 
-// Every plate of the family, the benchmark plate first.
-inline const std::vector<TrailPlate>& TrailPlateFamily();
-
-// The simulation spec of a plate (samples/specs/orbigon-stellar.toml's camera, film, thermal and emulsion
-// effects; no reseau defects; the plate's site, time, pointing, program, image and noise).
-inline std::string TrailPlateSpec(const TrailPlate& plate, double reference_peak_dn);
-
-}  // namespace platemeter::bench
-
-// ---- definitions (header-only: every bench/*.cpp is its own program)
-#include <cmath>
-
-namespace platemeter::bench {
-
-inline double TrailPlate::FwhmPx() const {
-  return std::sqrt(fwhm_um * fwhm_um + std::pow(2.3548 * blur_um, 2)) / pixel_um;
-}
-
-inline std::string TrailPlate::DashesText() const {
-  std::string text;
-  for (int n : leading_dashes) text += (text.empty() ? "" : ",") + std::to_string(n);
-  return text;
-}
-
+// Every plate of the family, the benchmark plate first (header-only: every bench/*.cpp is its own program).
 inline const std::vector<TrailPlate>& TrailPlateFamily() {
   // Local solar time = UTC + longitude / 15 h: "early" plates start about 20-21 h, "late" ones 3-4 h.
   static const std::vector<TrailPlate> family = {
@@ -79,6 +62,8 @@ inline const std::vector<TrailPlate>& TrailPlateFamily() {
   return family;
 }
 
+// The simulation spec of a plate (samples/specs/orbigon-stellar.toml's camera, film, thermal and emulsion
+// effects; no reseau defects; the plate's site, time, pointing, program, image and noise).
 inline std::string TrailPlateSpec(const TrailPlate& p, double reference_peak_dn) {
   std::string dashes = "[" + p.DashesText() + "]";
   auto num = [](double v) { return std::to_string(v); };

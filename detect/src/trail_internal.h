@@ -66,12 +66,12 @@ class Grid {
   // distance, must not walk millions of empty cells.
   template <class F>
   void Near(double x, double y, double r, F f) const {
-    if (!(std::isfinite(x) && std::isfinite(y) && r >= 0.0 && r < 1e7)) return;
-    const double reach_x = std::max(x_min_ * cell_ - 1.0, std::min(x, (x_max_ + 1) * cell_ + 1.0));
-    const double reach_y = std::max(y_min_ * cell_ - 1.0, std::min(y, (y_max_ + 1) * cell_ + 1.0));
-    if (std::abs(reach_x - x) > r || std::abs(reach_y - y) > r) return;  // (no point can lie within r)
-    const long x0 = std::max(Cell(x - r), x_min_), x1 = std::min(Cell(x + r), x_max_);
-    const long y0 = std::max(Cell(y - r), y_min_), y1 = std::min(Cell(y + r), y_max_);
+    if (!(std::isfinite(x) && std::isfinite(y) && r >= 0.0) || x_min_ > x_max_) return;
+    // The occupied cells' extent (px); the search range is cut to it before it becomes cell indices.
+    const double lo_x = x_min_ * cell_, hi_x = (x_max_ + 1) * cell_, lo_y = y_min_ * cell_, hi_y = (y_max_ + 1) * cell_;
+    if (x + r < lo_x || x - r > hi_x || y + r < lo_y || y - r > hi_y) return;  // (no point can lie within r)
+    const long x0 = std::max(Cell(std::max(x - r, lo_x)), x_min_), x1 = std::min(Cell(std::min(x + r, hi_x)), x_max_);
+    const long y0 = std::max(Cell(std::max(y - r, lo_y)), y_min_), y1 = std::min(Cell(std::min(y + r, hi_y)), y_max_);
     for (long cy = y0; cy <= y1; ++cy)
       for (long cx = x0; cx <= x1; ++cx) {
         auto it = cells_.find(Pack(cx, cy));

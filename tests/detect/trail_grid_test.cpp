@@ -55,6 +55,9 @@ TEST(TrailGrid, FarOffQueriesWithGrownRadiiFindNothingAndReturn) {
   // Within reach of the plate a huge radius still finds the points.
   grid.Near(-1e5, -1e5, 2e5, [&](int) { ++found; });
   EXPECT_EQ(found, 2);
+  // So does an unbounded one, from anywhere (the range is cut to the occupied cells, not refused).
+  grid.Near(1e12, 1e12, std::numeric_limits<double>::infinity(), [&](int) { ++found; });
+  EXPECT_EQ(found, 4);
 }
 
 TEST(TrailGrid, AnEmptyGridFindsNothing) {

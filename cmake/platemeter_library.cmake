@@ -1,5 +1,5 @@
 # platemeter_library(NAME PUBLIC deps... PRIVATE deps... [PCH <header>...])
-# One library per folder: sources in src/, public headers in include/platemeter/<name>/.
+# One library per folder: sources in src/ (and its subfolders, e.g. detect/src/trails/), public headers in include/platemeter/<name>/.
 # Sources are globbed so that adding a file needs no edit here.
 # PCH: the third-party headers most of the library's files include (Eigen, Ceres, OpenCV, ...),
 # parsed once per library instead of once per file: parsing them is most of the compile time
@@ -10,7 +10,7 @@
 # live in headers (core/angles.h, core/why.h, core/number_text.h, ...).
 function(platemeter_library name)
   cmake_parse_arguments(ARG "" "" "PUBLIC;PRIVATE;PCH" ${ARGN})
-  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/*.cpp)
+  file(GLOB_RECURSE sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/*.cpp)
   if(NOT sources)
     message(STATUS "platemeter: ${name}/ has no sources yet; library skipped")
     return()

@@ -105,7 +105,7 @@ TEST(SkyFlow, CarriesAStarsImageToEveryOtherExposureOfThePlate) {
   EXPECT_GT(four.max_px, 2 * six.max_px);
 }
 
-// What the flow decoder (detect/src/trail_flow.cpp) relies on, from the schedule alone: a dash read as
+// What the flow decoder (detect/src/trails/trail_flow.cpp) relies on, from the schedule alone: a dash read as
 // another dash exposure shifts the whole program in time; the shifted program lines up many images of
 // one trail (a trail read as its neighbour) but few dots of a second trail, because the trails' different
 // leading-dash counts shift their dot programs 30 s against each other. The decoder asks 4 dots of a second

@@ -272,7 +272,7 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
     o->tuning.clean_radius_spacings = 0;
   });
   EXPECT_GT(loose.wrong, 0);
-  // Without the sibling growth, the separator seeds and the plate's flow (docs/trails.md, "Hidden runs",
+  // Without the sibling growth, the separator seeds and the plate's flow (docs/trails_record.md, "Hidden runs",
   // "The plate's flow") fewer are found; without the flow alone, fewer too; without the lone trails numbered
   // by their runs along the flow ("The plate's flow" 4), fewer.
   const Score runs_only = rescored("leading runs only", [](TrailOptions* o) {

@@ -1,4 +1,4 @@
-// The trail linker's spatial hash (detect/src/trail_internal.h, internal): every point within the radius
+// The trail linker's spatial hash (detect/src/trails/trail_internal.h, internal): every point within the radius
 // and no other, wherever the query lies -- also far off the plate with a radius grown with the distance
 // (a place carried along the flow beyond its images: the search must not walk the empty cells between).
 #include <gtest/gtest.h>
@@ -9,7 +9,7 @@
 #include <set>
 #include <vector>
 
-#include "../detect/src/trail_internal.h"
+#include "../detect/src/trails/trail_internal.h"
 
 namespace platemeter {
 namespace {

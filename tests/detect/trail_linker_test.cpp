@@ -546,7 +546,7 @@ TEST(TrailLinker, APieceOfACrowdedClumpHoldsTheDashItMayBe) {
 
 // A rejected line reaches only its own pixels: a line along the scan's edge (the detector sees the
 // format's border as one, 600 px long and a few px wide) holds no dash 100 px inside the scan, where a
-// disk of half its length around its centre would (docs/trails.md, "Lines"). Here such lines run along
+// disk of half its length around its centre would (docs/trails_record.md, "Trails entering the format, and lines"). Here such lines run along
 // both edges of the band: tags as without them; the same lines without their box, fewer (a trail's run
 // within 300 px of one is "occupied" before its first dash).
 TEST(TrailLinker, ALineAlongTheEdgeHidesNothingBeyondItsBox) {

@@ -7,18 +7,13 @@
 #include <algorithm>
 #include <cmath>
 
-#include "median.h"
+#include "../median.h"
+#include "evidence.h"
 #include "trail_internal.h"
 
 namespace platemeter::trail_internal {
 
 namespace {
-constexpr double kFlowNotDecodedTolerances = 2.5, kSlowTolerances = 4.0;  // DecodeByFlow's slow stars, below
-// A second trail's images must sit where the first trail's do: the seed's own position error shifts a
-// right reading's predictions alike everywhere (whole V <= 8 plate: of 209 unique readings' dashless second
-// trails, 193 within 0.15 px of their first trail's offset); another star's dots lined up by a wrong reading
-// lie anywhere within the tolerance (the one wrong reading of that kind seen there: 0.52 px).
-constexpr double kSameOffset_px = 0.15;
 
 // The median offset of a reading's images of trail t (0-based) from their places along `path`.
 PixelPoint MedianOffset(const Context& c, const FlowPath& path, const std::vector<std::pair<int, int>>& taken, size_t t,
@@ -52,10 +47,9 @@ double FluxRatio(const Context& c, const std::vector<std::vector<std::pair<int, 
 // The star's flux per second from a reading's own images, for a blended seed (its flux shared with the
 // neighbour it was fitted with): the median rate of the images with a flux; 0 with fewer than 5.
 double ImagesFluxPerSecond(const Context& c, const FlowStar& s, int seed) {
-  constexpr size_t kMinImages = 5;
   std::vector<double> rate_dn_per_s = EvidenceRates(c, s.taken, seed);
   std::erase_if(rate_dn_per_s, [](double r) { return !(r > 0); });
-  return rate_dn_per_s.size() < kMinImages ? 0.0 : detect_internal::Median(rate_dn_per_s);
+  return rate_dn_per_s.size() < static_cast<size_t>(kMinFluxImages) ? 0.0 : detect_internal::Median(rate_dn_per_s);
 }
 }  // namespace
 
@@ -150,10 +144,6 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   // Decoded: a trail of flow_min_images and a second one holding more dots than a wrong reading lines up
   // (without a dash: more, at the first trail's offset; below).
   // A candidate (another one makes the decision ambiguous): a trail of 5 and a second one with 3 dots.
-  constexpr int kSecondTrailDots = 4, kCandidateFirst = 5, kCandidateDots = 3, kOtherDashes = 2, kDurations = 4;
-  constexpr int kDashlessDots = 5;
-  constexpr int kManyDashes = 5, kManyDashesDurations = 3, kOneDashDurations = 5;
-  constexpr double kMinFluxRatio = 0.8;
   // Evidence of a reading: the trail with the most images, and the dots of the next best trail. A wrong
   // reading lines up one trail of the star (the trails' dot programs are shifted 30 s against each other)
   // and at most 2 dots of any other (docs/trails.md, "The plate's flow": the schedule's own shifts), except
@@ -204,7 +194,6 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       if (static_cast<int>(t) != any_top) ev.any_second_dots = std::max(ev.any_second_dots, any_dots[t]);
     return ev;
   };
-  constexpr int kSlowFirst = 12, kSlowSecondTrailDots = 8, kSlowDurations = 5;
   const int need_first = slow ? std::max(kSlowFirst, o.tuning.flow_min_images) : o.tuning.flow_min_images;
   const int need_second_dots = slow ? kSlowSecondTrailDots : kSecondTrailDots;
   const int need_durations = slow ? kSlowDurations : kDurations;
@@ -222,12 +211,12 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       // A blended seed: the reading's images, whatever their flux, give the star's flux per second.
       double reading_flux_per_s = flux_per_s;
       if (blended) {
-        if (CollectAlongFlow(c, all, path, p, e.mid_s, 0.0, own, excluded).hits < 3) continue;
+        if (CollectAlongFlow(c, all, path, p, e.mid_s, 0.0, own, excluded).hits < kOwnTrailImages) continue;
         reading_flux_per_s =
             ImagesFluxPerSecond(c, CollectAlongFlow(c, all, path, p, e.mid_s, 0.0, every_trail, excluded), dash);
         if (!(reading_flux_per_s > 0)) continue;
       }
-      if (CollectAlongFlow(c, all, path, p, e.mid_s, reading_flux_per_s, own, excluded).hits < 3) continue;
+      if (CollectAlongFlow(c, all, path, p, e.mid_s, reading_flux_per_s, own, excluded).hits < kOwnTrailImages) continue;
       FlowStar s = CollectAlongFlow(c, all, path, p, e.mid_s, reading_flux_per_s, every_trail, excluded);
       // The dash itself must be taken as that exposure (alone within the tolerance); a blended seed's flux
       // may fail the reading's: then no other image may be taken there, and the seed joins the reading.

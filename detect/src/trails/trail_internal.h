@@ -367,4 +367,16 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
                      const std::function<bool(int)>& excluded, const std::function<int(int)>& trail_of,
                      LoneTrail* out);
 
+// Runs of leading dashes (runs.cpp): elongated images equally spaced along a line, each run in spatial order.
+// With measured segments (trail-mode detection) a dash's neighbours lie along its own direction at 1.5 of
+// its length; a run whose end dash has several candidates beyond it (a crossing) is left out.
+std::vector<std::vector<int>> FindRuns(const Context& c, const Grid& dashes, const std::vector<int>& dash_ids);
+
+// The final sidereal fit of one trail's images (exposure, image) at their tagged mid times (final_fit.cpp):
+// weighted track, outliers (studentised residual over bad_sigma x the robust spread, over min_bad_px) flagged
+// bad one at a time, at most a third; every image's residual, refined position and its sigma written into
+// `out`, the chain's rms and bad count. false when the images cannot support a track.
+bool FitTrail(const Context& c, const std::vector<std::pair<int, int>>& taken, TrailChain* chain,
+              std::vector<TrailImage>* out, Track* final_track);
+
 }  // namespace platemeter::trail_internal

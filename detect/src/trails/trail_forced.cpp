@@ -10,9 +10,9 @@
 #include <tbb/parallel_for.h>
 
 #include "platemeter/core/error.h"
-#include "median.h"
-#include "scan_window.h"
-#include "star_internal.h"
+#include "../median.h"
+#include "../scan_window.h"
+#include "../star_internal.h"
 #include "trail_internal.h"
 
 namespace platemeter {
@@ -146,6 +146,48 @@ MeasuredDot MeasureDot(const ScanPixels& scan, const ForcedCandidate& c, const F
   }
   const double sign = scan.dark ? -1.0 : 1.0;  // (the background as stored)
   return MeasuredDot{Outcome::kMeasured, s, sign * (level + fit.offset_dn)};
+}
+
+// The measured dot as a detection (id F000001, ...; `index`: those before it) tagged as its exposure of the
+// candidate's trail, at its measured position, its residual the prediction's.
+ForcedDot ForcedDotOf(const ForcedCandidate& c, const MeasuredDot& m, const TrailLinkResult& linked,
+                      const TrailOptions& trail_options, size_t index) {
+  const star_internal::FittedSegment& s = m.segment;
+  ForcedDot f;
+  DetectedStar& d = f.image;
+  d.point.id = fmt::format("F{:06d}", index + 1);
+  d.point.kind = PointKind::kStar;
+  d.point.status = PointStatus::kMeasured;
+  d.point.position_px = {s.x_px, s.y_px};
+  d.point.sigma_x_px = s.sigma_x_px, d.point.sigma_y_px = s.sigma_y_px;
+  d.point.correlation_xy = s.correlation_xy;
+  d.flux_dn = s.flux_dn, d.sigma_flux_dn = s.sigma_flux_dn;
+  d.snr = s.flux_dn / s.sigma_flux_dn;
+  d.background_dn = m.background_dn;
+  d.fwhm_px = c.fwhm_px;
+  d.length_px = c.length_px;
+  d.angle_deg = std::remainder(c.angle_rad, std::numbers::pi) * 180.0 / std::numbers::pi;
+  const double sigma_psf = c.fwhm_px / kFwhmPerSigma;
+  d.ellipticity = 1.0 - sigma_psf / std::sqrt(sigma_psf * sigma_psf + c.length_px * c.length_px / 12.0);
+  d.peak_dn = s.flux_dn / (std::sqrt(2.0 * std::numbers::pi) * sigma_psf) *
+              std::erf(0.5 * c.length_px / (std::numbers::sqrt2 * sigma_psf)) / std::max(c.length_px, 1e-9);
+  f.replaces = c.replaces;
+  TrailImage& t = f.tag;
+  const ShutterExposure& e = *c.exposure;
+  t.chain = c.chain;
+  t.star = linked.chains[c.chain].star;
+  t.assigned = true;
+  t.forced = true;
+  t.trail = e.trail;
+  t.kind = ExposureKind::kDot;
+  t.dot_index = e.dot_index;
+  t.mid_s = e.mid_s;
+  t.refined_px = d.point.position_px;
+  t.residual_x_px = s.x_px - c.predicted.x_px, t.residual_y_px = s.y_px - c.predicted.y_px;
+  t.residual_px = std::hypot(t.residual_x_px, t.residual_y_px);
+  t.sigma_refined_x_px = std::hypot(s.sigma_x_px, trail_options.position_floor_px);
+  t.sigma_refined_y_px = std::hypot(s.sigma_y_px, trail_options.position_floor_px);
+  return f;
 }
 
 }  // namespace
@@ -283,42 +325,7 @@ std::vector<ForcedDot> MeasureMissingDots(const ScanPixels& scan, const std::vec
       case Outcome::kOffFlux: ++stats.off_flux; continue;
       case Outcome::kMeasured: break;
     }
-    const star_internal::FittedSegment& s = m.segment;
-    ForcedDot f;
-    DetectedStar& d = f.image;
-    d.point.id = fmt::format("F{:06d}", out.size() + 1);
-    d.point.kind = PointKind::kStar;
-    d.point.status = PointStatus::kMeasured;
-    d.point.position_px = {s.x_px, s.y_px};
-    d.point.sigma_x_px = s.sigma_x_px, d.point.sigma_y_px = s.sigma_y_px;
-    d.point.correlation_xy = s.correlation_xy;
-    d.flux_dn = s.flux_dn, d.sigma_flux_dn = s.sigma_flux_dn;
-    d.snr = s.flux_dn / s.sigma_flux_dn;
-    d.background_dn = m.background_dn;
-    d.fwhm_px = c.fwhm_px;
-    d.length_px = c.length_px;
-    d.angle_deg = std::remainder(c.angle_rad, std::numbers::pi) * 180.0 / std::numbers::pi;
-    const double sigma_psf = c.fwhm_px / kFwhmPerSigma;
-    d.ellipticity = 1.0 - sigma_psf / std::sqrt(sigma_psf * sigma_psf + c.length_px * c.length_px / 12.0);
-    d.peak_dn = s.flux_dn / (std::sqrt(2.0 * std::numbers::pi) * sigma_psf) *
-                std::erf(0.5 * c.length_px / (std::numbers::sqrt2 * sigma_psf)) / std::max(c.length_px, 1e-9);
-    f.replaces = c.replaces;
-    TrailImage& t = f.tag;
-    const ShutterExposure& e = *c.exposure;
-    t.chain = c.chain;
-    t.star = linked.chains[c.chain].star;
-    t.assigned = true;
-    t.forced = true;
-    t.trail = e.trail;
-    t.kind = ExposureKind::kDot;
-    t.dot_index = e.dot_index;
-    t.mid_s = e.mid_s;
-    t.refined_px = d.point.position_px;
-    t.residual_x_px = s.x_px - c.predicted.x_px, t.residual_y_px = s.y_px - c.predicted.y_px;
-    t.residual_px = std::hypot(t.residual_x_px, t.residual_y_px);
-    t.sigma_refined_x_px = std::hypot(s.sigma_x_px, trail_options.position_floor_px);
-    t.sigma_refined_y_px = std::hypot(s.sigma_y_px, trail_options.position_floor_px);
-    out.push_back(std::move(f));
+    out.push_back(ForcedDotOf(c, m, linked, trail_options, out.size()));
     ++stats.measured;
   }
   if (stats_out) *stats_out = stats;

@@ -1,0 +1,69 @@
+#pragma once
+// The evidence the flow's readings must show (trail_flow.cpp DecodeByFlow, trail_lone.cpp DecodeLoneTrail,
+// decoder_flow_fill.cpp): the decoder's fixed counts in one place, each with what its value rests on. The
+// tolerances and thresholds that tests and benchmarks vary are TrailOptions::Tuning (trail_linker.h).
+// "The whole V <= 8 plate" is the benchmark plate (bench_trails, docs/trails.md); the counts were set there
+// and hold on the plate family's other plates (bench_trails --family).
+namespace platemeter::trail_internal {
+
+// --- A reading's own trail and its flux
+// Images of the reading's own trail near the seed that let the rest of the plate be searched (most wrong
+// readings of most dashes stop here: a wrong reading finds little near the seed).
+inline constexpr int kOwnTrailImages = 3;
+// Images with a flux a blended seed's reading needs to take the star's flux per second from them (a median
+// of fewer is one image's flux).
+inline constexpr int kMinFluxImages = 5;
+// Dashes besides the seed, and exposure durations among the images (of the program's six): a reading shifted
+// by a dot group maps the dots onto other durations; the flux tolerance (a faint dot's sigma) lets some of
+// those through (on the whole V <= 8 plate: 1.2 s dots read as 0.6 s ones, 10 s as 6.2 s), not all.
+inline constexpr int kOtherDashes = 2, kDurations = 4;
+
+// --- DecodeByFlow: a star with two trails or more
+// A slow star (10 s of motion, the shift between some readings, within this many flow tolerances) is not
+// decoded: a wrong reading lands near its own images. Under kSlowTolerances it must show the kSlow* counts
+// (with the usual ones the whole V <= 8 plate had 19 wrong tags, a lone trail read under another number with
+// 4 chance dots of a "second trail").
+inline constexpr double kFlowNotDecodedTolerances = 2.5, kSlowTolerances = 4.0;
+inline constexpr int kSlowFirst = 12, kSlowSecondTrailDots = 8, kSlowDurations = 5;
+// Decoded: a trail of flow_min_images and this many dots of a second trail (a wrong reading lines up one trail
+// of the star and at most 2 dots of any other: the trails' dot programs are shifted 30 s against each other,
+// sky_flow_test's schedule check).
+inline constexpr int kSecondTrailDots = 4;
+// A candidate (a second one makes the decision ambiguous): a trail of 5 and 3 dots of another.
+inline constexpr int kCandidateFirst = 5, kCandidateDots = 3;
+// A second trail without a dash of its own counts (crowds hide dashes) with this many dots of two groups at
+// the first trail's offset, within kSameOffset_px: the seed's own position error shifts a right reading's
+// predictions alike everywhere (whole V <= 8 plate: of 209 unique readings' dashless second trails, 193
+// within 0.15 px of their first trail's offset); another star's dots lined up by a wrong reading lie anywhere
+// within the tolerance (the one wrong reading of that kind seen there: 0.52 px).
+inline constexpr int kDashlessDots = 5;
+inline constexpr double kSameOffset_px = 0.15;
+// Where the crowd hides the star's other dashes or durations, other proof of the seed's flux (not a slow
+// star's): many dashes (5) with 3 durations; one dash with 5 durations, or with kDurations and the images'
+// flux per second the seed's (their ratio within kMinFluxRatio .. 1 / kMinFluxRatio; a merged seed reads
+// about 0.5).
+inline constexpr int kManyDashes = 5, kManyDashesDurations = 3, kOneDashDurations = 5;
+inline constexpr double kMinFluxRatio = 0.8;
+
+// --- DecodeLoneTrail: a star with one trail on the format
+// A slow star (10 s of motion within this many flow tolerances) is not decoded: readings shifted by 10 s land
+// on its own images. (Its run may merge: the merged explanation counts it.)
+inline constexpr double kLoneNotDecodedTolerances = 2.0;
+// A reading lining up this many dots of another trail makes the star DecodeByFlow's (which left it undecided).
+inline constexpr int kOtherTrailDots = 3;
+// A group of readings with this many images past the run is a candidate; exactly one may exist.
+inline constexpr int kCandidateImages = 5;
+// A trail cut by the format's edge: its dashes and at least two dot durations.
+inline constexpr int kMinDurationsCut = 3;
+// A reading showing this many images of another trail of the star shows that trail.
+inline constexpr int kShownImages = 3;
+// An empty place of a trail counts where an image of that trail (any star's) is tagged within this (a cloud
+// or a shutter fault during one trail empties its places on every star).
+inline constexpr double kExposedRadius_px = 150.0;
+
+// --- Filling along the flow
+// Images a decoded star's missing trail filled along the flow must hold, of two exposure durations (a single
+// image at the flow's tolerance may be a chance coincidence over the thousands of places tried).
+inline constexpr int kSiblingFillImages = 3;
+
+}  // namespace platemeter::trail_internal

@@ -127,7 +127,8 @@ struct TrailOptions {
                                        // predicted from)
 
   // The decoder's internal constants (docs/trails.md): each comment says what the value rests on. Tests and
-  // benchmarks may change them; a plate should not need to.
+  // benchmarks may change them; a plate should not need to. (The fixed counts of evidence the flow's readings
+  // must show are in detect/src/trails/evidence.h.)
   struct Tuning {
     double run_spacing_tolerance = 0.2;  // fraction; leading dashes' spacings may differ from their mean by this
     double max_run_bend_deg = 10.0;      // deg; largest turn between consecutive leading dashes

@@ -38,7 +38,7 @@ class TrailDecoder {
     double flux_per_s = 0;   // the star's flux per second of exposure (DN/s)
     // A run's: the place one dash before it, its dash spacing, its dashes' mean flux and length, and whether
     // an image there may hold a dash (its number then needs a sibling's confirmation, step 4).
-    PixelPoint before;
+    PixelPoint before_px;
     double spacing_px = 0, dash_flux_dn = 0, dash_length_px = 0;
     bool before_occupied = false;
     Taken grown;             // a run's images as grown (steps 1-2), before Settle
@@ -50,7 +50,7 @@ class TrailDecoder {
   struct Retimed {
     bool ok = false;
     Track track;
-    double t0 = 0, t1 = 0;
+    double t0_s = 0, t1_s = 0;  // its images' first and last re-timed mid times
   };
   // Step 4's findings.
   struct NumberCheck {

@@ -44,7 +44,7 @@ TrailDecoder::NumberCheck TrailDecoder::RetimeTracks() const {
       Retimed& rt = nc.retimed[k][u];
       if (u == t) {
         rt.ok = true, rt.track = chain_[k].track;
-        Ends(k, &rt.t0, &rt.t1);
+        Ends(k, &rt.t0_s, &rt.t1_s);
         continue;
       }
       const int shift = program_.leading_dashes[u] - program_.leading_dashes[t];
@@ -58,7 +58,7 @@ TrailDecoder::NumberCheck TrailDecoder::RetimeTracks() const {
       }
       if (ts.size() < 4 || !rt.track.Fit(ts, ps, {}, {}, chain_[k].track.degree())) continue;
       rt.ok = true;
-      rt.t0 = *std::min_element(ts.begin(), ts.end()), rt.t1 = *std::max_element(ts.begin(), ts.end());
+      rt.t0_s = *std::min_element(ts.begin(), ts.end()), rt.t1_s = *std::max_element(ts.begin(), ts.end());
     }
   }
   return nc;
@@ -80,7 +80,7 @@ void TrailDecoder::FindJoins(NumberCheck* nc) const {
       const int ub = ua + 1;
       const Retimed& ra = nc->retimed[a][ua];
       if (!ra.ok) continue;
-      const PixelPoint end = ra.track.At(ra.t1);
+      const PixelPoint end = ra.track.At(ra.t1_s);
       for (int tb = 0; tb < trails_; ++tb) {
         const int jj = program_.leading_dashes[ub] - program_.leading_dashes[tb];
         if (jj < 0 || jj >= static_cast<int>(c_.per_trail[ub].size())) continue;
@@ -88,7 +88,7 @@ void TrailDecoder::FindJoins(NumberCheck* nc) const {
         heads.Near(q.x_px, q.y_px, 10.0 + 0.05 * Dist(q, end), [&](int b) {
           if (b == a || result_.chains[b].trail - 1 != tb || !nc->retimed[b][ub].ok) return;
           const Retimed& rb = nc->retimed[b][ub];
-          if (!OnOneArc(ra.track, ra.t1, rb.track, rb.t0)) return;
+          if (!OnOneArc(ra.track, ra.t1_s, rb.track, rb.t0_s)) return;
           if (ua == ta && ub == tb) {
             ++nc->partner_count[a][tb + 1], ++nc->partner_count[b][ta + 1];
             nc->joins.push_back({a, b});
@@ -112,7 +112,7 @@ void TrailDecoder::ConfirmNumbers(NumberCheck* nc) {
   const auto sibling_score = [&](int k, int u) {
     const Retimed& r = nc->retimed[k][u];
     if (!r.ok) return 0;
-    return SiblingsOf(c_, *all_, r.track, r.t0, r.t1, u, chain_[k].flux_per_s,
+    return SiblingsOf(c_, *all_, r.track, r.t0_s, r.t1_s, u, chain_[k].flux_per_s,
                       [&](int i) { return result_.images[i].chain == k; }).hits;
   };
   for (int k : nc->decoded) {
@@ -144,7 +144,7 @@ void TrailDecoder::ConfirmNumbers(NumberCheck* nc) {
 bool TrailDecoder::ConfirmedAlone(int k) {
   const ChainState& cs = chain_[k];
   DashHolder holder{cs.dash_flux_dn, cs.dash_length_px};
-  ForReaching(c_, *all_, cs.before, o_.tuning.clean_radius_spacings * cs.spacing_px, [&](int i) {
+  ForReaching(c_, *all_, cs.before_px, o_.tuning.clean_radius_spacings * cs.spacing_px, [&](int i) {
     if (result_.images[i].chain != k) holder.Add(images_[i]);
   });
   const bool clean = !holder.Holds();

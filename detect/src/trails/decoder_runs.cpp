@@ -96,7 +96,7 @@ void TrailDecoder::DecodeRun(const std::vector<int>& run) {
   const int cid = PushChain(tc);
   ChainState& cs = chain_[cid];
   cs.before_occupied = holder.Holds();
-  cs.before = before;
+  cs.before_px = before;
   cs.spacing_px = Dist(a, b);
   cs.dash_flux_dn = dash_flux, cs.dash_length_px = dash_length;
   cs.flux_per_s = flux_per_s;

@@ -50,10 +50,10 @@ inline double Dist(const PixelPoint& a, const PixelPoint& b) {
   return std::sqrt(dx * dx + dy * dy);
 }
 
-// Spatial hash of points in cells of `cell` px.
+// Spatial hash of points in cells of `cell_px`.
 class Grid {
  public:
-  Grid(const std::vector<PixelPoint>& p, const std::vector<int>& ids, double cell) : p_(p), cell_(cell) {
+  Grid(const std::vector<PixelPoint>& p, const std::vector<int>& ids, double cell_px) : p_(p), cell_px_(cell_px) {
     for (int i : ids) {
       cells_[Key(p[i].x_px, p[i].y_px)].push_back(i);
       const long cx = Cell(p[i].x_px), cy = Cell(p[i].y_px);
@@ -68,7 +68,7 @@ class Grid {
   void Near(double x, double y, double r, F f) const {
     if (!(std::isfinite(x) && std::isfinite(y) && r >= 0.0) || x_min_ > x_max_) return;
     // The occupied cells' extent (px); the search range is cut to it before it becomes cell indices.
-    const double lo_x = x_min_ * cell_, hi_x = (x_max_ + 1) * cell_, lo_y = y_min_ * cell_, hi_y = (y_max_ + 1) * cell_;
+    const double lo_x = x_min_ * cell_px_, hi_x = (x_max_ + 1) * cell_px_, lo_y = y_min_ * cell_px_, hi_y = (y_max_ + 1) * cell_px_;
     if (x + r < lo_x || x - r > hi_x || y + r < lo_y || y - r > hi_y) return;  // (no point can lie within r)
     const long x0 = std::max(Cell(std::max(x - r, lo_x)), x_min_), x1 = std::min(Cell(std::min(x + r, hi_x)), x_max_);
     const long y0 = std::max(Cell(std::max(y - r, lo_y)), y_min_), y1 = std::min(Cell(std::min(y + r, hi_y)), y_max_);
@@ -82,11 +82,11 @@ class Grid {
   }
 
  private:
-  long Cell(double v) const { return static_cast<long>(std::floor(v / cell_)); }
+  long Cell(double v) const { return static_cast<long>(std::floor(v / cell_px_)); }
   static long long Pack(long x, long y) { return (static_cast<long long>(x) << 32) ^ (y & 0xffffffffLL); }
   long long Key(double x, double y) const { return Pack(Cell(x), Cell(y)); }
   const std::vector<PixelPoint>& p_;
-  double cell_;
+  double cell_px_;
   std::unordered_map<long long, std::vector<int>> cells_;
   long x_min_ = std::numeric_limits<long>::max(), x_max_ = std::numeric_limits<long>::min();  // occupied cells
   long y_min_ = std::numeric_limits<long>::max(), y_max_ = std::numeric_limits<long>::min();

@@ -228,6 +228,7 @@ StageOutput RunStarStage(const DetectContext& context) {
     }
   out.summary["trails"] = {{"decoded_trails", decoded},
                            {"refused_runs", static_cast<long>(linked.chains.size()) - decoded},
+                           {"refused_readings", linked.refused_readings},
                            {"decoded_trails_by_step", by_step},
                            {"stars", linked.stars.size()},
                            {"assigned_dots", linked.assigned_dots},

@@ -81,6 +81,7 @@ class TrailDecoder {
   void ForMissingTrails(const std::function<void(int root, int s, int k, double t_end_s, const PixelPoint& origin)>& fn);
   void CompleteStars();
   std::vector<int> FlowSeeds() const;
+  bool ReadingRefuted(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s);
   int FlowPlaceImage(const FlowPath& path, double dt_s, const PixelPoint& origin, const ShutterExposure& e,
                      double flux_per_s) const;
   void FillTrailsAlongFlow();

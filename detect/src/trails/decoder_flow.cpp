@@ -9,6 +9,7 @@
 #include <map>
 
 #include "decoder.h"
+#include "evidence.h"
 
 namespace platemeter::trail_internal {
 
@@ -23,6 +24,7 @@ void TrailDecoder::FlowTrails() {
     if (result_.images[dash].chain >= 0) continue;
     FlowStar star;
     if (!DecodeByFlow(c_, *all_, flow_, dash, excluded, &star)) continue;
+    if (ReadingRefuted(dash, star.seed_s, star.taken, star.flux_per_s)) continue;
     const PixelPoint v = flow_.Velocity(c_.p[dash]);
     AddFlowStar(star, std::hypot(v.x_px, v.y_px), -1);
   }
@@ -34,6 +36,12 @@ void TrailDecoder::FlowTrails() {
       if (result_.images[dash].chain >= 0) continue;
       LoneTrail lone;
       if (!DecodeLoneTrail(c_, *all_, flow_, dash, excluded, trail_of, &lone)) continue;
+      std::vector<Taken> per_trail(trails_);
+      per_trail[lone.trail] = lone.taken;
+      double seed_s = std::nan("");  // (the seed is one of the run's dashes it took)
+      for (const auto& [j, i] : lone.taken)
+        if (i == dash) seed_s = c_.per_trail[lone.trail][j].mid_s;
+      if (std::isfinite(seed_s) && ReadingRefuted(dash, seed_s, per_trail, lone.flux_per_s)) continue;
       const PixelPoint v = flow_.Velocity(c_.p[dash]);
       AddChain(TrailStep::kLone, lone.trail, lone.taken, lone.flux_per_s, std::hypot(v.x_px, v.y_px), 0,
                o_.tuning.flow_min_images);
@@ -150,6 +158,19 @@ void TrailDecoder::ForMissingTrails(
       const double t_end_s = s > result_.chains[k].trail - 1 ? t1 : t0;
       fn(root, s, k, t_end_s, chain_[k].track.At(t_end_s));
     }
+}
+
+// Whether a reading of the seed (the seed at seed_s; its images `taken` per trail) is refused for the dash
+// places it predicts empty (docs/trails.md "Empty dash places"): they are counted at the reading's faintest
+// dash's flux and must not make the reading kRefuteOdds times likelier wrong than right.
+bool TrailDecoder::ReadingRefuted(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s) {
+  const auto trail_of = [&](int i) { return result_.images[i].assigned ? result_.images[i].trail : 0; };
+  if (!o_.ablation.flow_empty_places) return false;
+  const DashPlaces places = ReadingPlaces(c_, *all_, PlatePath(c_, flow_, c_.p[dash]), c_.p[dash], seed_s,
+                                          FaintestDashRate(c_, taken, flux_per_s), trail_of);
+  const bool refuted = EmptyPlacesLogOdds(places) > std::log(kRefuteOdds);
+  result_.refused_readings += refuted;
+  return refuted;
 }
 
 // Decoded stars' missing trails collected along the flow.

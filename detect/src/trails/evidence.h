@@ -4,6 +4,9 @@
 // tolerances and thresholds that tests and benchmarks vary are TrailOptions::Tuning (trail_linker.h).
 // "The whole V <= 8 plate" is the benchmark plate (bench_trails, docs/trails.md); the counts were set there
 // and hold on the plate family's other plates (bench_trails --family).
+#include <algorithm>
+#include <cmath>
+
 namespace platemeter::trail_internal {
 
 // --- A reading's own trail and its flux
@@ -60,6 +63,25 @@ inline constexpr int kShownImages = 3;
 // An empty place of a trail counts where an image of that trail (any star's) is tagged within this (a cloud
 // or a shutter fault during one trail empties its places on every star).
 inline constexpr double kExposedRadius_px = 150.0;
+
+// --- A reading's empty dash places (reading_places.cpp; DecodeByFlow's and DecodeLoneTrail's readings)
+// The share of a reading's dash places the plate shows empty, by flux (CountDashPlaces), when the reading is
+// right and when it is wrong. Measured on the four tuning plates: right readings 0.3-1.1 % (a crowd hides a
+// dash), wrong ones 17-43 % (a wrong reading puts its dashes where the star was exposed for a dot or not at
+// all). Both rates are set towards each other, so that only clear cases decide.
+inline constexpr double kEmptyWhenRight = 0.03, kEmptyWhenWrong = 0.30;
+// A reading is refused when its empty places make it this many times likelier wrong than right (with the
+// rates above: 6 of 30 places empty; 5 of 20).
+inline constexpr double kRefuteOdds = 100.0;
+// An image this many times the dash's flux hides or halves a dash near it (on the benchmark plate and
+// Denver, right readings' empty places lay 3-7 px beside images of 4-135 times their dash's flux, their
+// dashes missing or measured as points at a third to a half of their flux). Its reach grows with the log of
+// the ratio, as a photographic image's diameter grows linearly with magnitude. (Ratio 2 with 2 FWHM per
+// decade gave the same figures on the benchmark plate and Miami as 3 with 1.5.)
+inline constexpr double kDominatingRatio = 3.0;
+inline double DominatedReach_px(double fwhm_px, double flux_ratio) {
+  return (2.0 + 1.5 * std::min(3.0, std::log10(flux_ratio))) * fwhm_px;
+}
 
 // --- Filling along the flow
 // Images a decoded star's missing trail filled along the flow must hold, of two exposure durations (a single

@@ -254,6 +254,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
                             (cover.durations >= kOneDashDurations ||
                              (cover.durations >= kDurations && ratio > kMinFluxRatio && ratio < 1.0 / kMinFluxRatio));
       if (!usual && (blended || !(crowded && (many_dashes || one_dash)))) continue;  // (not a blended seed's flux)
+      s.seed_s = e.mid_s;
       best = std::move(s);
     }
   if (readings != 1 || best.hits == 0) return false;

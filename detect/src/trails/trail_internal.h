@@ -149,16 +149,19 @@ inline bool CouldHoldDash(const DetectedStar& d, double dash_flux_dn, double das
 
 // Whether the images near a place may hold a dash between them: one that could on its own, or pieces fainter
 // than half of it whose fluxes add up to half of it (the deblender may cut a dash crossed by other images).
-// by_flux: by their fluxes added up (and any image without one, or a piece of a crowded clump, whose flux
-// the deblender may have given a neighbour), whatever their lengths -- for a dash whose flux is known to be
-// the star's (CouldHoldDash lets another star's dash of 2 % of it hold).
+// by_flux: by their fluxes added up (and any image without one, a piece of a crowded clump, or an image
+// fitted jointly with a neighbour, whose flux the deblender or the fit may have given the neighbour: beside
+// a bright star a dash is measured as a blended point at a third to a half of its flux), whatever their
+// lengths -- for a dash whose flux is known to be the star's (CouldHoldDash lets another star's dash of 2 %
+// of it hold).
 struct DashHolder {
   double dash_flux_dn = 0, dash_length_px = 0;
   double faint_flux_dn = 0;
   bool held = false;
   bool by_flux = false;
   void Add(const DetectedStar& d) {
-    if (by_flux ? !(d.flux_dn > 0) || (d.flags & kStarCrowded) : CouldHoldDash(d, dash_flux_dn, dash_length_px))
+    if (by_flux ? !(d.flux_dn > 0) || (d.flags & (kStarCrowded | kStarBlended))
+                : CouldHoldDash(d, dash_flux_dn, dash_length_px))
       held = true;
     else faint_flux_dn += d.flux_dn;
   }
@@ -325,6 +328,7 @@ FlowPath PlatePath(const Context& c, const SkyFlow& flow, const PixelPoint& p);
 struct FlowStar {
   std::vector<std::vector<std::pair<int, int>>> taken;
   double flux_per_s = 0.0;
+  double seed_s = 0.0;  // the reading's time of its seed (DecodeByFlow)
   int hits = 0;  // images taken over all trails
 };
 // Every exposure of the trails in `trail_mask` (bit t: trail t, 0-based) predicted along `path` (the star
@@ -342,6 +346,29 @@ FlowStar CollectAlongFlow(const Context& c, const Grid& all, const FlowPath& pat
 // within 4 it needs a trail of 12, 8 dots of a second trail and 5 durations.
 bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int dash,
                   const std::function<bool(int)>& excluded, FlowStar* out);
+
+// The dash places of trail s (0-based) predicted along `path` for a star at p at seed_s (reading_places.cpp):
+// `inside` counts those inside the format (edge margin) where no image of kDominatingRatio times the dash's
+// flux or more reaches (DominatedReach_px: its light hides or halves the dash, so the place says nothing);
+// `empty` counts those of them where trail s was exposed (an image of it, any star's, tagged within
+// kExposedRadius_px) and nothing could hold the dash, judged by flux (DashPlaceEmpty, by_flux; an image
+// tagged as another number whose flux tolerance could not have let the dash through holds nothing).
+// trail_of(i): the trail number (1..) image i is tagged with, 0 if none.
+struct DashPlaces {
+  int inside = 0, empty = 0;
+};
+DashPlaces CountDashPlaces(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s,
+                           int s, double flux_per_s, const std::function<int(int)>& trail_of);
+// CountDashPlaces summed over every trail: a whole reading's places (the seed at p at seed_s).
+DashPlaces ReadingPlaces(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s,
+                         double flux_per_s, const std::function<int(int)>& trail_of);
+// The flux per second of a reading's faintest dash (taken: per trail, (exposure, image); evidence only), at
+// most flux_per_s: a blend only adds flux, so the faintest dash is the star's own.
+double FaintestDashRate(const Context& c, const std::vector<std::vector<std::pair<int, int>>>& taken,
+                        double flux_per_s);
+// The log of how much likelier a reading's empty places are if the reading is wrong than if it is right: each
+// place empty with probability kEmptyWhenWrong or kEmptyWhenRight (evidence.h), independently.
+double EmptyPlacesLogOdds(const DashPlaces& places);
 
 // A lone trail (trail_lone.cpp): a star whose other trails are off the format or hidden, numbered by its
 // leading run found along the flow.

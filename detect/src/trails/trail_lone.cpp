@@ -27,37 +27,15 @@ int FirstDot(const std::vector<ShutterExposure>& ex) {
 
 // Whether, under trail number u (the seed at seed_s of that trail), another trail of the star lies on the
 // format where nothing could hold it: at least two of its dashes' places inside the format along the flow,
-// at least two of them empty and at most one not (a crowd may put an image at one), by flux
-// (DashHolder::by_flux: the star's dashes measure alike). The flow predicts a place to flow_tolerance_px
-// over hundreds of pixels, so an empty place says the trail is not there.
+// at least two of them empty and at most one not (a crowd may put an image at one), by flux (CountDashPlaces;
+// places beside a much brighter image do not count). The flow predicts a place to flow_tolerance_px over
+// hundreds of pixels, so an empty place says the trail is not there.
 bool SiblingAbsent(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s, int u,
                    double flux_per_s, const std::function<int(int)>& trail_of) {
-  const TrailOptions& o = c.o;
   for (int s = 0; s < static_cast<int>(c.per_trail.size()); ++s) {
     if (s == u) continue;
-    int inside = 0, empty = 0;
-    for (const ShutterExposure& e : c.per_trail[s]) {
-      if (e.kind != ExposureKind::kDash) continue;
-      const double dt = e.mid_s - seed_s;
-      if (!path.Covers(dt)) continue;
-      const PixelPoint q = path.At(dt);
-      if (!Inside(o, q, o.edge_margin_px)) continue;
-      ++inside;
-      // Only where trail s was exposed: another star's image of it tagged nearby (a cloud or a shutter fault
-      // during one trail empties its places on every star).
-      bool exposed = false;
-      all.Near(q.x_px, q.y_px, kExposedRadius_px, [&](int i) { exposed = exposed || trail_of(i) == s + 1; });
-      const double tol_px = FlowTolerance_px(o, q, p);
-      // (An image tagged as another trail number of another star, whose flux leaves no room for this dash,
-      // holds none of it; one tagged with trail s may be the star's own.)
-      const double dash_flux_dn = flux_per_s * e.duration_s;
-      const auto explained = [&](int i) {
-        return trail_of(i) > 0 && trail_of(i) != s + 1 && CannotHideDash(c, i, dash_flux_dn);
-      };
-      empty += exposed && DashPlaceEmpty(c, all, q, path.VelocityAt(dt), dash_flux_dn, e.duration_s, tol_px, true,
-                                         explained);
-    }
-    if (inside >= 2 && empty >= std::max(2, inside - 1)) return true;
+    const DashPlaces places = CountDashPlaces(c, all, path, p, seed_s, s, flux_per_s, trail_of);
+    if (places.inside >= 2 && places.empty >= std::max(2, places.inside - 1)) return true;
   }
   return false;
 }

@@ -209,6 +209,9 @@ struct TrailOptions {
                                        // measured as that dash (merged, cut, shaped wrong) where the place
                                        // before it holds one of the run's dashes (docs/trails.md, "The
                                        // plate's flow" 4)
+    bool flow_empty_places = true;     // a flow or lone reading refused when its dash places the plate shows empty
+                                       // make it 100 times likelier wrong than right (docs/trails.md, "Empty
+                                       // dash places")
   } ablation;
   bool Check(std::string* why) const;  // every setting, tuning included
 };
@@ -265,6 +268,8 @@ struct TrailLinkResult {
   long assigned_dots = 0;
   long assigned_dashes = 0;
   long bad_images = 0;             // assigned images flagged bad
+  // Seeds whose flow or lone reading was refused for its empty dash places (docs/trails.md "Empty dash places").
+  long refused_readings = 0;
   // "D dots and L dashes tagged in T trails of S stars (B bad); R runs refused".
   std::string Summary() const;
 };

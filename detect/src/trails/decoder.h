@@ -77,6 +77,7 @@ class TrailDecoder {
   void FlowTrails();
   bool FitFlow();
   void CheckJoinsOnFlow();
+  void CheckSeparatorStars();
   void AddFlowStar(const FlowStar& star, double rate_px_per_s, int root);
   void ForMissingTrails(const std::function<void(int root, int s, int k, double t_end_s, const PixelPoint& origin)>& fn);
   void CompleteStars();

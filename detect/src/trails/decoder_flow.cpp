@@ -16,6 +16,7 @@ namespace platemeter::trail_internal {
 void TrailDecoder::FlowTrails() {
   if (!FitFlow()) return;
   CheckJoinsOnFlow();
+  CheckSeparatorStars();
   CompleteStars();
   const auto excluded = [&](int i) { return Excluded(i); };
   const std::vector<int> seeds = FlowSeeds();
@@ -104,6 +105,35 @@ void TrailDecoder::CheckJoinsOnFlow() {
     for (int k : strays) {
       chain_[root].numbers &= ~(1u << (result_.chains[k].trail - 1));
       Refuse(k, TrailReason::kOffFlow);
+    }
+  }
+}
+
+// Stars of separator trails only (step 6 numbered them by a sibling's raw images, which a wrong number can
+// find too) are read as the flow's readings are: from their brightest dash, refused with all their trails
+// when their empty dash places refute the reading (ReadingRefuted). A star holding a trail decoded by its
+// run has its number from that run.
+void TrailDecoder::CheckSeparatorStars() {
+  std::map<int, std::vector<int>> trails_of;  // star root -> its decoded trails
+  for (int k = 0; k < static_cast<int>(result_.chains.size()); ++k)
+    if (Decoded(k)) trails_of[Root(k)].push_back(k);
+  for (const auto& [root, ks] : trails_of) {
+    if (std::any_of(ks.begin(), ks.end(), [&](int k) { return result_.chains[k].decoded_by != TrailStep::kSeparators; }))
+      continue;
+    std::vector<Taken> taken(trails_);
+    int seed = -1, seed_trail = 0;
+    for (int k : ks) {
+      const int s = result_.chains[k].trail - 1;
+      taken[s] = chain_[k].kept;
+      for (const auto& [j, i] : chain_[k].kept)
+        if (c_.per_trail[s][j].kind == ExposureKind::kDash && IsEvidence(c_, i) &&
+            (seed < 0 || images_[i].flux_dn > images_[seed].flux_dn))
+          seed = i, seed_trail = k;
+    }
+    if (seed < 0 || !ReadingRefuted(seed, result_.images[seed].mid_s, taken, chain_[seed_trail].flux_per_s)) continue;
+    for (int k : ks) {
+      chain_[root].numbers &= ~(1u << (result_.chains[k].trail - 1));
+      Refuse(k, TrailReason::kEmptyPlaces);
     }
   }
 }

@@ -26,6 +26,7 @@ const char* TrailReasonName(TrailReason reason) {
     case TrailReason::kUnjoined: return "unjoined";
     case TrailReason::kUnresolvedRun: return "unresolved_run";
     case TrailReason::kOffFlow: return "off_flow";
+    case TrailReason::kEmptyPlaces: return "empty_dash_places";
     case TrailReason::kBadFit: return "bad_fit";
   }
   return "";

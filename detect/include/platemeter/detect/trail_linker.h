@@ -88,6 +88,7 @@ enum class TrailReason {
   kUnjoined,                 // a grown sibling that does not join its source
   kUnresolvedRun,            // a slow star's run whose dashes merge
   kOffFlow,                  // a trail off the plate's flow
+  kEmptyPlaces,              // its star's reading predicts dashes where the plate shows none (a separator star)
   kBadFit,                   // tagged, its position an outlier of the track fit
 };
 const char* TrailReasonName(TrailReason reason);  // "not_star", ...; "" for kNone
@@ -268,7 +269,8 @@ struct TrailLinkResult {
   long assigned_dots = 0;
   long assigned_dashes = 0;
   long bad_images = 0;             // assigned images flagged bad
-  // Seeds whose flow or lone reading was refused for its empty dash places (docs/trails.md "Empty dash places").
+  // Readings refused for their empty dash places (docs/trails.md "Empty dash places"): flow and lone readings
+  // (counted per seed tried) and stars of separator trails.
   long refused_readings = 0;
   // "D dots and L dashes tagged in T trails of S stars (B bad); R runs refused".
   std::string Summary() const;

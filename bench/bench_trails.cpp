@@ -8,11 +8,13 @@
 // the same image for the throughput comparison.
 //
 //   bench_trails [--plate NAME | --family tune|report|all] [--pixel-um 20] [--mag-limit 8] [--rows N]
-//                [--min-snr 10] [--keep DIR [--reuse | --rescore]] [--no-sep] [--lost FILE] [--crosses-only] [--list]
+//                [--min-snr 10] [--keep DIR [--reuse | --rescore]] [--no-sep] [--lost FILE] [--crosses-only]
+//                [--platemeter PATH] [--list]
 //   --reuse keeps a kept scan (the render is deterministic); --rescore also a kept detection (scores it again).
 //   --plate NAME runs one plate of the family (trail_plates.h; --list shows them), default the benchmark plate
 //   (Beltsville, 12 May 1972); --family runs the tuning plates, the held-out ones or all, and prints a summary.
 //   --pixel-um, --mag-limit, --sensor-dn and --grain-dn override the plate's.
+//   --platemeter PATH detects with that binary (a copy of another build: two builds compared on the same scans)
 //   --crosses-only detects and scores the reseau crosses only, in seconds.
 //   --rows N renders only N rows through the middle of the plate (trails cut by
 //   the band's edges are not counted); default the whole plate.
@@ -156,6 +158,7 @@ struct RunSettings {
   bool rescore = false;      // --rescore: score a kept detection again (no detection run)
   FILE* lost_out = nullptr;  // --lost FILE
   std::string bench_stars;   // bench_stars' path (SEP's child mode)
+  std::string platemeter = PLATEMETER_BIN;  // --platemeter PATH: another build's binary (a copy, to compare builds)
 };
 
 // The plate's truth, reduced to what the score needs.
@@ -564,7 +567,7 @@ PlateScore RunPlate(const bench::TrailPlate& plate, const RunSettings& run) {
   char fwhm_px[32];
   std::snprintf(fwhm_px, sizeof fwhm_px, "%.2f", plate.FwhmPx());
   const std::string out = dir + "/out";
-  std::vector<std::string> args = {PLATEMETER_BIN, "detect", scan, "--camera", "orbigon", "--orientation", "180m", "-o", out};
+  std::vector<std::string> args = {run.platemeter, "detect", scan, "--camera", "orbigon", "--orientation", "180m", "-o", out};
   if (!run.crosses_only)
     args.insert(args.end(), {"--stars", "--star-fwhm-px", fwhm_px, "--trails-start-utc", plate.start_utc,
                              "--trail-dashes", plate.DashesText(), "--trail-break-s", std::to_string(plate.break_s)});
@@ -649,7 +652,7 @@ void PrintFamilySummary(const std::vector<bench::TrailPlate>& plates, const std:
   std::fprintf(stderr,
                "usage: bench_trails [--plate NAME | --family tune|report|all] [--pixel-um UM] [--mag-limit V] [--rows N] "
                "[--min-snr 10] [--isolation-fwhm 3] [--ref-peak-dn DN] [--sensor-dn DN] [--grain-dn DN] "
-               "[--keep DIR [--reuse | --rescore]] [--no-sep] [--lost FILE] [--crosses-only] [--list]\n");
+               "[--keep DIR [--reuse | --rescore]] [--no-sep] [--lost FILE] [--crosses-only] [--platemeter PATH] [--list]\n");
   std::exit(2);
 }
 
@@ -685,6 +688,7 @@ int main(int argc, char** argv) {
     else if (a == "--reuse") run.reuse = true;
     else if (a == "--rescore") run.reuse = run.rescore = true;
     else if (a == "--lost") lost_file = next();
+    else if (a == "--platemeter") run.platemeter = next();
     else if (a == "--list") {
       for (const bench::TrailPlate& p : bench::TrailPlateFamily())
         std::printf("%-22s %-6s lat %5.1f start %s roll %5.0f axis alt %4.0f az %4.0f pixel %4.1f um FWHM %.2f px "

@@ -76,7 +76,8 @@ MeasuredPoint StarRow(const DetectedStar& star) {
 // track_y_px with track_sigma_*_px, for the images the track was fitted to (track_fit, and bad ones).
 // An image off its track (bad) is rejected; one found along the plate's flow beyond the track's images
 // (flow_check) or measured at the track's prediction (forced_fit) has no track of its own here.
-MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const UtcInstant& start_utc) {
+MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const TrailLinkResult& linked,
+                       const UtcInstant& start_utc) {
   MeasuredPoint row = StarRow(star);
   const bool dot = t.kind == ExposureKind::kDot;
   row.kind = dot ? PointKind::kTrailDot : PointKind::kTrailDash;
@@ -89,6 +90,8 @@ MeasuredPoint TrailRow(const DetectedStar& star, const TrailImage& t, const UtcI
   std::snprintf(value, sizeof value, t.flow_checked ? "flow_residual_px=%.4f" : "track_residual_px=%.4f",
                 t.residual_px);
   row.flags.push_back(value);
+  // (the evidence its trail was decoded by: a run of leading dashes is the strongest, a lone trail's the weakest)
+  row.flags.push_back(std::string("trail_step=") + TrailStepName(linked.chains[t.chain].decoded_by));
   if (!t.flow_checked && !t.forced) {
     std::snprintf(value, sizeof value, "track_x_px=%.4f", t.refined_px.x_px);
     row.flags.push_back(value);
@@ -214,9 +217,9 @@ StageOutput RunStarStage(const DetectContext& context) {
       out.rows.push_back(std::move(row));
       continue;
     }
-    out.rows.push_back(TrailRow(stars[i], t, *start_utc));
+    out.rows.push_back(TrailRow(stars[i], t, linked, *start_utc));
   }
-  for (const ForcedDot& f : forced) out.rows.push_back(TrailRow(f.image, f.tag, *start_utc));
+  for (const ForcedDot& f : forced) out.rows.push_back(TrailRow(f.image, f.tag, linked, *start_utc));
   nlohmann::json reasons = nlohmann::json::object();
   for (const auto& [reason, n] : unassigned) reasons[reason] = n;
   long decoded = 0;

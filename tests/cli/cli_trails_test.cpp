@@ -16,6 +16,8 @@
 #include <set>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "platemeter/calib/star_catalog.h"
 #include "platemeter/measure/measurement_file.h"
 #include "support/orbigon_trails.h"
@@ -36,6 +38,13 @@ std::optional<double> FlagValue(const MeasuredPoint& m, const std::string& name)
     if (f.size() > name.size() && f.compare(0, name.size() + 1, name + "=") == 0)
       return std::stod(f.substr(name.size() + 1));
   return std::nullopt;
+}
+
+// The text of a flag "name=text" of a row, "" if it has none.
+std::string FlagText(const MeasuredPoint& m, const std::string& name) {
+  for (const std::string& f : m.flags)
+    if (f.size() > name.size() && f.compare(0, name.size() + 1, name + "=") == 0) return f.substr(name.size() + 1);
+  return "";
 }
 
 TEST(CliTrails, DetectWritesTimeTaggedTrailDotsThatMatchTheTruth) {
@@ -74,10 +83,12 @@ TEST(CliTrails, DetectWritesTimeTaggedTrailDotsThatMatchTheTruth) {
   double own_z2_x = 0, own_z2_y = 0;  // the tracked dots' own errors over their stated sigmas, squared
   long own_dots = 0, own_beyond_4 = 0;
   std::map<std::string, std::set<std::string>> truth_stars_of;
+  std::map<std::string, std::set<std::string>> trails_by_step;  // a row's trail_step= -> its star + trail
   std::set<std::string> ids;
   for (const MeasuredPoint& m : found.points) {
     if (m.kind != PointKind::kTrailDot && m.kind != PointKind::kTrailDash) continue;
     ++rows;
+    trails_by_step[FlagText(m, "trail_step")].insert(m.star_id + "-" + m.trail);
     EXPECT_TRUE(ids.insert(m.id).second) << m.id;
     EXPECT_EQ(m.id, m.star_id + "-" + m.trail + (m.kind == PointKind::kTrailDot ? "-D" : "-L") + std::to_string(*m.dot));
     const MeasuredPoint* best = nullptr;
@@ -113,6 +124,15 @@ TEST(CliTrails, DetectWritesTimeTaggedTrailDotsThatMatchTheTruth) {
     }
   }
   for (const auto& [star, truths] : truth_stars_of) EXPECT_EQ(truths.size(), 1u) << star << " mixes truth stars";
+  // Every trail row names the step that decoded its trail, and the rows' trails per step are the ones
+  // detect.json counts (two outputs written from different places agree).
+  const nlohmann::json counts = nlohmann::json::parse(
+      testing::ReadTextFile(dir.file("out/trails.detect.json")))["stars"]["trails"]["decoded_trails_by_step"];
+  EXPECT_EQ(trails_by_step.count(""), 0u) << "trail rows without a trail_step flag";
+  EXPECT_GT(trails_by_step["run"].size(), 10u);
+  for (const auto& [step, trails] : trails_by_step)
+    EXPECT_EQ(static_cast<long>(trails.size()), counts.value(step, -1L)) << "trail_step=" << step;
+  EXPECT_EQ(counts.size(), trails_by_step.size());
   std::printf("[cli trails] %ld trail rows, %ld of %ld dots of whole trails right (%.1f %%; %ld measured at their "
               "tracks' predictions), %ld wrong, %zu stars\n", rows, right_dots, truth_dots,
               100.0 * right_dots / truth_dots, forced_dots, wrong, truth_stars_of.size());

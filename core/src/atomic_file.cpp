@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 
 #include "platemeter/core/error.h"
 
@@ -35,6 +36,24 @@ int WriteWhole(const std::string& path, std::string_view contents) {
   return error_number;
 }
 
+// Same folder as the target so the rename stays on one file system; the
+// ".partial." infix is ignored by git (.gitignore) and by the readers.
+std::string TempPathFor(const std::string& path) {
+  const std::filesystem::path target(path);
+  return (target.parent_path() / ("." + target.stem().string() + ".partial" + target.extension().string())).string();
+}
+
+// Renames the finished temporary file over `path`; removes it if that fails.
+void RenameIntoPlace(const std::string& path, const std::string& temp_path) {
+  std::error_code ec;
+  std::filesystem::rename(temp_path, path, ec);
+  if (ec) {
+    std::error_code ignored;
+    std::filesystem::remove(temp_path, ignored);
+    throw EnvironmentError(path, "cannot rename into place (" + ec.message() + ")");
+  }
+}
+
 }  // namespace
 
 void WriteFileAtomicallyThrough(const std::string& path, const std::string& temp_path, std::string_view contents) {
@@ -45,23 +64,27 @@ void WriteFileAtomicallyThrough(const std::string& path, const std::string& temp
     fs::remove(temp_path, ignored);
     throw EnvironmentError(path, "write failed (" + OsReason(error_number) + ")");
   }
-  std::error_code ec;
-  fs::rename(temp_path, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(temp_path, ignored);
-    throw EnvironmentError(path, "cannot rename into place (" + ec.message() + ")");
-  }
+  RenameIntoPlace(path, temp_path);
 }
 
 void WriteFileAtomically(const std::string& path, std::string_view contents) {
-  namespace fs = std::filesystem;
-  const fs::path target(path);
-  // Same folder as the target so the rename stays on one file system; the
-  // ".partial." infix is ignored by git (.gitignore) and by the readers.
-  const fs::path temp = target.parent_path() /
-                        ("." + target.stem().string() + ".partial" + target.extension().string());
-  WriteFileAtomicallyThrough(path, temp.string(), contents);
+  WriteFileAtomicallyThrough(path, TempPathFor(path), contents);
+}
+
+void WriteFileAtomicallyStreamed(const std::string& path, const std::function<void(std::ostream&)>& put) {
+  const std::string temp_path = TempPathFor(path);
+  try {
+    std::ofstream out(temp_path, std::ios::binary | std::ios::trunc);
+    if (!out) throw EnvironmentError(path, "write failed (" + OsReason(errno) + ")");
+    put(out);
+    out.close();  // flushes; a full disk shows here at the latest
+    if (!out) throw EnvironmentError(path, "write failed (" + OsReason(errno != 0 ? errno : EIO) + ")");
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(temp_path, ignored);
+    throw;
+  }
+  RenameIntoPlace(path, temp_path);
 }
 
 }  // namespace platemeter

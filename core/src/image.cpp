@@ -353,6 +353,8 @@ void Image::ReadWindowInto(const PixelRect& rect, float* values_dn) const {
   });
 }
 
+void Image::ReleaseCachedTiles() const { Cache()->invalidate(oiio::ustring(info_.path), /*force=*/true); }
+
 void Image::ReadRowsDirect(long y0_px, long rows, float* values_dn) const {
   if (rows <= 0 || y0_px < 0 || y0_px + rows > info_.height_px) {
     throw Error(info_.path, "rows " + std::to_string(y0_px) + "+" + std::to_string(rows) + " lie outside the image");

@@ -153,14 +153,16 @@ const std::vector<std::string>& MeasurementColumns(bool truth_columns) {
   return truth_columns ? kAll : kPlain;
 }
 
-std::string FormatMeasurementFile(const MeasurementFile& file) {
+namespace {
+
+// The file's text, streamed to `out` (FormatMeasurementFile's rules).
+void PutMeasurementFile(const MeasurementFile& file, std::ostream& out) {
   const MeasurementHeader& h = file.header;
   bool truth = file.truth_columns;
   for (const MeasuredPoint& p : file.points) {
     if (p.status == PointStatus::kTruth || p.crb_x_px || p.crb_y_px || p.crb_xy_corr) truth = true;
   }
 
-  std::ostringstream out;
   out << kTitle << '\n';
   auto header_line = [&out](const std::string& key, const std::string& value) {
     CheckHeaderValue(value, key);
@@ -246,17 +248,25 @@ std::string FormatMeasurementFile(const MeasurementFile& file) {
     }
     out << '\n';
   }
+}
+
+}  // namespace
+
+std::string FormatMeasurementFile(const MeasurementFile& file) {
+  std::ostringstream out;
+  PutMeasurementFile(file, out);
   return out.str();
 }
 
 void WriteMeasurementFile(const std::string& path, const MeasurementFile& file) {
-  std::string text;
+  // Streamed: a plate's file runs to tens of MB, which need not be held in memory twice.
   try {
-    text = FormatMeasurementFile(file);
+    WriteFileAtomicallyStreamed(path, [&file](std::ostream& out) { PutMeasurementFile(file, out); });
+  } catch (const EnvironmentError&) {
+    throw;
   } catch (const Error& e) {
     throw Error(path, e.reason());
   }
-  WriteFileAtomically(path, text);
 }
 
 namespace {

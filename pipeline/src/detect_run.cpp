@@ -170,11 +170,18 @@ DetectRun RunDetection(const DetectRequest& request, const DefinitionRegistry& r
                               .reseau = detections.reseau ? &*detections.reseau : nullptr,
                               .fiducials = detections.fiducials ? &*detections.fiducials : nullptr,
                               .orientation = detections.orientation};
-  std::vector<std::pair<std::string, StageOutput>> stages;
-  if (request.stars || request.trails) stages.emplace_back("stars", RunStarStage(context));
-  if (request.passpoints) stages.emplace_back("passpoints", RunPasspointStage(context));
   DetectRun run;
   run.file = ToMeasurementFile(detections, request.scan, request.camera, pixel_size_um);
+  // The stages append to the file's rows (moved through them, not copied).
+  std::vector<std::pair<std::string, StageOutput>> stages;
+  if (request.stars || request.trails) {
+    stages.emplace_back("stars", RunStarStage(context, std::move(run.file.points)));
+    run.file.points = std::move(stages.back().second.rows);
+  }
+  if (request.passpoints) {
+    stages.emplace_back("passpoints", RunPasspointStage(context, std::move(run.file.points)));
+    run.file.points = std::move(stages.back().second.rows);
+  }
   run.summary = SummaryJson(detections, request.scan, grid_name);
   run.grid_name = grid_name;
   if (detections.masked_px > 0) {
@@ -184,7 +191,6 @@ DetectRun RunDetection(const DetectRequest& request, const DefinitionRegistry& r
   if (detections.reseau) run.messages += "reseau: " + detections.reseau->summary + "\n";
   if (detections.fiducials) run.messages += "fiducials: " + detections.fiducials->summary + "\n";
   for (auto& [key, stage] : stages) {
-    run.file.points.insert(run.file.points.end(), stage.rows.begin(), stage.rows.end());
     run.summary[key] = std::move(stage.summary);
     run.messages += key + ": " + stage.message + "\n";
   }

@@ -126,7 +126,7 @@ nlohmann::json WidthModelJson(const StarWidthModel& model, double start_fwhm_px)
 
 }  // namespace
 
-StageOutput RunStarStage(const DetectContext& context) {
+StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint> rows) {
   const DetectRequest& request = context.request;
   StarDetectorOptions options;
   options.dark = !request.stars_bright;
@@ -173,6 +173,7 @@ StageOutput RunStarStage(const DetectContext& context) {
   const std::vector<DetectedStar> stars = DetectStars(context.image, options, &stats);
 
   StageOutput out;
+  out.rows = std::move(rows);
   int measured = 0, rejected = 0;
   for (const DetectedStar& star : stars) {
     measured += star.point.status == PointStatus::kMeasured;
@@ -183,6 +184,7 @@ StageOutput RunStarStage(const DetectContext& context) {
     out.summary["width_model"] = WidthModelJson(stats.width_model, options.psf_fwhm_px);
     out.summary["noise_peaks_dropped"] = stats.noise_peaks;  // docs/stars.md step 4
     out.summary["noise_peak_level_sigma"] = stats.noise_peak_level_sigma;
+    out.rows.reserve(out.rows.size() + stars.size());
     for (const DetectedStar& star : stars) out.rows.push_back(StarRow(star));
     out.message = std::to_string(stars.size()) + " images";
     return out;
@@ -202,9 +204,11 @@ StageOutput RunStarStage(const DetectContext& context) {
   ForcedDotStats forced_stats;
   const std::vector<ForcedDot> forced =
       MeasureMissingDots(scan, stars, linked, schedule, trail_options, forced_options, &forced_stats);
+  context.image.ReleaseCachedTiles();  // the trails' windows are all read: the cache's tiles go before the rows grow
   std::vector<bool> replaced(stars.size(), false);  // detections re-measured as a trail's dot
   for (const ForcedDot& f : forced)
     if (f.replaces >= 0) replaced[f.replaces] = true;
+  out.rows.reserve(out.rows.size() + stars.size() - std::count(replaced.begin(), replaced.end(), true) + forced.size());
   std::map<std::string, long> unassigned;
   for (size_t i = 0; i < stars.size(); ++i) {
     if (replaced[i]) continue;

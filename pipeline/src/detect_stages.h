@@ -39,8 +39,10 @@ struct StageOutput {
 };
 
 // Stars (kind star) and, with request.trails, the duty-cycle trails (kinds trail_dot, trail_dash).
-StageOutput RunStarStage(const DetectContext& context);
+// Each stage appends its rows to `rows` (the rows measured so far, moved in and returned as out.rows) so a
+// plate's hundreds of thousands of rows are never held twice.
+StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint> rows);
 // Passpoints (kind passpoint) as request.passpoints defines them.
-StageOutput RunPasspointStage(const DetectContext& context);
+StageOutput RunPasspointStage(const DetectContext& context, std::vector<MeasuredPoint> rows);
 
 }  // namespace platemeter::pipeline

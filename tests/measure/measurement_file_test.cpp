@@ -26,6 +26,13 @@ bool SameBits(const std::optional<double>& a, const std::optional<double>& b) {
   return !a || std::memcmp(&*a, &*b, sizeof(double)) == 0;
 }
 
+// The files (and temporaries) in a folder.
+int EntriesIn(const std::filesystem::path& dir) {
+  int entries = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir)) ++entries;
+  return entries;
+}
+
 MeasurementFile Sample() {
   MeasurementFile file;
   file.header.plate_id = "orbigon-1320";
@@ -135,9 +142,50 @@ TEST(MeasurementFile, RoundTripsExactlyThroughAFile) {
   // Writing what was read gives the same bytes.
   EXPECT_EQ(FormatMeasurementFile(back), FormatMeasurementFile(original));
   // Nothing but the file itself is left in the folder (no temporary).
-  int entries = 0;
-  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path())) ++entries;
-  EXPECT_EQ(entries, 1);
+  EXPECT_EQ(EntriesIn(dir.path()), 1);
+}
+
+// The writer streams its rows to the temporary file: a defect found at the last row (after 100000 rows,
+// several MB, are on the disk) must still leave the earlier file as it was and no temporary beside it.
+TEST(MeasurementFile, AWriteRefusedLateLeavesTheEarlierFileAndNoTemporary) {
+  testing::TempDir dir;
+  const std::string path = dir.file("plate.csv");
+  WriteMeasurementFile(path, Sample());
+  const std::string before = FormatMeasurementFile(Sample());
+  MeasurementFile large = Sample();
+  const MeasuredPoint model = large.points.front();
+  for (int i = 0; i < 100000; ++i) {
+    MeasuredPoint p = model;
+    p.id = "S" + std::to_string(i);
+    p.kind = PointKind::kStar;
+    large.points.push_back(p);
+  }
+  large.points.push_back(large.points.back());  // a duplicate id, found only at the end
+  try {
+    WriteMeasurementFile(path, large);
+    FAIL() << "a file with a duplicate point written";
+  } catch (const EnvironmentError&) {
+    FAIL() << "a defect of the data reported as the machine's";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.subject(), path);
+    EXPECT_EQ(e.reason(), "duplicate point star 'S99999'");
+  }
+  std::ifstream in(path, std::ios::binary);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), before);
+  EXPECT_EQ(EntriesIn(dir.path()), 1);
+}
+
+// A folder that does not exist is the machine's (or the user's path's) problem, reported as such.
+TEST(MeasurementFile, AWriteIntoAMissingFolderIsAnEnvironmentError) {
+  testing::TempDir dir;
+  const std::string path = dir.file("no such folder/plate.csv");
+  try {
+    WriteMeasurementFile(path, Sample());
+    FAIL() << "written into a missing folder";
+  } catch (const EnvironmentError& e) {
+    EXPECT_EQ(e.subject(), path);
+    EXPECT_EQ(e.reason(), "write failed (No such file or directory)");
+  }
 }
 
 TEST(MeasurementFile, LayoutIsTheDocumentedOne) {

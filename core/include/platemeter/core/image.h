@@ -101,6 +101,9 @@ class Image {
   void ReadRowsDirect(long y0_px, long rows, float* values_dn) const;
   // The tile height of a tiled file, else 1.
   long rows_alignment_px() const { return info_.tiled ? info_.tile_height_px : 1; }
+  // Drops this file's decoded tiles from the shared cache (a stage done with its windows gives the memory
+  // back; a later read decodes them anew).
+  void ReleaseCachedTiles() const;
 
  private:
   ImageInfo info_;

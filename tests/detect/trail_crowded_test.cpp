@@ -274,7 +274,7 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   EXPECT_GT(loose.wrong, 0);
   // Without the sibling growth, the separator seeds and the plate's flow (docs/trails_record.md, "Hidden runs",
   // "The plate's flow") fewer are found; without the flow alone, fewer too; without the lone trails numbered
-  // by their runs along the flow ("The plate's flow" 4), fewer.
+  // by their runs along the flow ("The plate's flow" 5), fewer.
   const Score runs_only = rescored("leading runs only", [](TrailOptions* o) {
     o->ablation.grow_siblings = o->ablation.pattern_trails = o->ablation.flow_trails = false;
   });
@@ -297,7 +297,7 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   EXPECT_EQ(no_siblings.wrong, 0);
   EXPECT_LT(no_siblings.right, score.right);
   // Without the crowded readings (a reading's dashless second trail at its first trail's offset, the seed's
-  // flux shown by few dashes: docs/trails.md, "The plate's flow" 3), fewer.
+  // flux shown by few dashes: docs/trails.md, "The plate's flow" 4), fewer.
   const Score no_crowded = rescored("without the crowded readings",
                                     [](TrailOptions* o) { o->ablation.flow_crowded_readings = false; });
   EXPECT_EQ(no_crowded.wrong, 0);
@@ -313,7 +313,7 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
   EXPECT_LT(joined.right, score.right);
   // Every star's first separator dash fitted jointly with a neighbour (flag blended, 1.6 x its flux) and its
   // leading runs hidden (crowded pieces, no evidence): the stars decoded through the flow from the blended
-  // seeds (docs/trails.md, "The plate's flow" 3) are more, none wrong.
+  // seeds (docs/trails.md, "The plate's flow" 4) are more, none wrong.
   for (size_t k = 0; k < field->found.size(); ++k) {
     const MeasuredPoint& t = DominantTruth(*field, k);
     if (t.kind != PointKind::kTrailDash) continue;
@@ -329,7 +329,7 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
 
 // Stars with a single trail on the plate (as where the others leave the format): no sibling can number it,
 // only its own run. The runs a crowd hides from the run linker are found along the plate's flow
-// (docs/trails.md, "The plate's flow" 4): more trails decoded, none wrongly.
+// (docs/trails.md, "The plate's flow" 5): more trails decoded, none wrongly.
 TEST(TrailCrowded, LoneTrailsAreNumberedByTheirRunsAlongTheFlow) {
   if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
     GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
@@ -340,7 +340,7 @@ TEST(TrailCrowded, LoneTrailsAreNumberedByTheirRunsAlongTheFlow) {
   });
   // (With every option: in a field of lone trails only, a separator-grown trail numbered by a grown sibling
   // found a chance "sibling" among other stars' images, 38 wrong tags on one star, until the flow checked
-  // every star's joins: docs/trails.md, "The plate's flow" 1.)
+  // every star's joins: docs/trails.md, "The plate's flow" 2.)
   // This field drops the star's other trails where the format would show them (no plate can): the entering
   // trails' rule reads their absence as evidence against the true number (1028 wrong tags), so it is off here
   // (TrailsEnteringTheFormatAreNumberedByTheirSiblingsAbsence keeps every trail on a smaller format). So is
@@ -355,7 +355,7 @@ TEST(TrailCrowded, LoneTrailsAreNumberedByTheirRunsAlongTheFlow) {
   EXPECT_GT(score.right, before.right + score.clean_dots / 20);  // figures in docs/trails.md
   // The dash before the last of every run of 3 dashes or more measured wrong (as merged with a neighbour:
   // 1.5 x its flux, 1.6 x its length, no flag): the runs go on over its place where the dash before it is
-  // there (docs/trails.md, "The plate's flow" 4); more right, none wrong.
+  // there (docs/trails.md, "The plate's flow" 5); more right, none wrong.
   for (size_t k = 0; k < field->found.size(); ++k) {
     const MeasuredPoint& t = DominantTruth(*field, k);
     const int leading = LeadingDashes(t);
@@ -404,7 +404,7 @@ TEST(TrailCrowded, TrailsEnteringTheFormatAreNumberedByTheirSiblingsAbsence) {
 
 // A star's trail showing a few images only (the rest lost under dust, off the format or too faint) has too
 // few for a track of its own. Carried along the flow from the star's decoded trail nearest in time, each
-// exposure's place holds its image to the flow's tolerance (docs/trails.md, "The plate's flow" 6). Here
+// exposure's place holds its image to the flow's tolerance (docs/trails.md, "The plate's flow" 3). Here
 // every third star's T3 keeps five of its dots (one a group).
 TEST(TrailCrowded, AStarsSparseTrailIsFilledAlongTheFlowFromItsOtherTrails) {
   if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))

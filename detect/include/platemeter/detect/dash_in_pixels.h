@@ -1,6 +1,6 @@
 #pragma once
 // Whether the pixels show a trail's dash where the plate's flow puts it (docs/trails.md, "The plate's
-// flow" 4). A lone trail is numbered by counting its leading run's dashes back from the last one; in a
+// flow" 5). A lone trail is numbered by counting its leading run's dashes back from the last one; in a
 // crowd a dash often merges with a neighbour into one detection whose centre, length and flux are no
 // dash's, and the detections alone cannot say whether the dash is there. The pixels can: the dash's place,
 // direction, length and flux are known, so its light is fitted in three pieces (the sweep's thirds, each a

@@ -201,15 +201,15 @@ struct TrailOptions {
                                        // offset (within 0.15 px) with 5 dots of 2 groups; the seed's flux is
                                        // shown by 5 other dashes and 3 durations, or 1 dash and 5 durations
                                        // (4 with the images' flux per second the seed's) (docs/trails.md,
-                                       // "The plate's flow" 3)
+                                       // "The plate's flow" 4)
     bool flow_blended_seeds = true;    // a dash fitted jointly with a neighbour (blended: its flux is not the
                                        // star's) seeds too (not a slow star's): each reading takes the star's
                                        // flux per second from its own images, then needs the usual evidence
-                                       // (docs/trails.md, "The plate's flow" 3)
+                                       // (docs/trails.md, "The plate's flow" 4)
     bool flow_lone_held_dashes = true;  // a lone trail's run goes on over a dash's place held by an image not
                                        // measured as that dash (merged, cut, shaped wrong) where the place
                                        // before it holds one of the run's dashes (docs/trails.md, "The
-                                       // plate's flow" 4)
+                                       // plate's flow" 5)
     bool flow_empty_places = true;     // a flow or lone reading refused when its dash places the plate shows empty
                                        // make it 100 times likelier wrong than right (docs/trails.md, "Empty
                                        // dash places")

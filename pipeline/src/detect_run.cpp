@@ -172,16 +172,9 @@ DetectRun RunDetection(const DetectRequest& request, const DefinitionRegistry& r
                               .orientation = detections.orientation};
   DetectRun run;
   run.file = ToMeasurementFile(detections, request.scan, request.camera, pixel_size_um);
-  // The stages append to the file's rows (moved through them, not copied).
-  std::vector<std::pair<std::string, StageOutput>> stages;
-  if (request.stars || request.trails) {
-    stages.emplace_back("stars", RunStarStage(context, std::move(run.file.points)));
-    run.file.points = std::move(stages.back().second.rows);
-  }
-  if (request.passpoints) {
-    stages.emplace_back("passpoints", RunPasspointStage(context, std::move(run.file.points)));
-    run.file.points = std::move(stages.back().second.rows);
-  }
+  std::vector<std::pair<std::string, StageOutput>> stages;  // (each appends its rows to the file's)
+  if (request.stars || request.trails) stages.emplace_back("stars", RunStarStage(context, &run.file.points));
+  if (request.passpoints) stages.emplace_back("passpoints", RunPasspointStage(context, &run.file.points));
   run.summary = SummaryJson(detections, request.scan, grid_name);
   run.grid_name = grid_name;
   if (detections.masked_px > 0) {

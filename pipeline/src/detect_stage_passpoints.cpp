@@ -73,7 +73,7 @@ std::vector<PasspointMask> MaskOf(const DetectContext& context, double passpoint
 
 }  // namespace
 
-StageOutput RunPasspointStage(const DetectContext& context, std::vector<MeasuredPoint> rows) {
+StageOutput RunPasspointStage(const DetectContext& context, std::vector<MeasuredPoint>* rows) {
   const PasspointRequest& request = *context.request.passpoints;
   if (!(request.diameter_um > 0.0)) throw Error("--passpoint-diameter-um", "must be > 0");
   if (request.shape != "dot" && request.shape != "ring")
@@ -98,7 +98,6 @@ StageOutput RunPasspointStage(const DetectContext& context, std::vector<Measured
       DetectPasspoints(context.image, options, request.list_file.empty() ? nullptr : &list);
 
   StageOutput out;
-  out.rows = std::move(rows);
   for (const PasspointPoint& p : found.points) {
     MeasuredPoint row;
     row.id = p.point.id;
@@ -113,7 +112,7 @@ StageOutput RunPasspointStage(const DetectContext& context, std::vector<Measured
     }
     if (!p.point.reason.empty()) row.flags.push_back(std::string(PointStatusName(p.point.status)) + ":" + p.point.reason);
     row.flags.insert(row.flags.end(), p.flags.begin(), p.flags.end());
-    out.rows.push_back(std::move(row));
+    rows->push_back(std::move(row));
   }
   out.summary = {{"mode", found.from_list ? "list" : "automatic"},
                  {"list_file", request.list_file},

@@ -126,7 +126,7 @@ nlohmann::json WidthModelJson(const StarWidthModel& model, double start_fwhm_px)
 
 }  // namespace
 
-StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint> rows) {
+StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint>* rows) {
   const DetectRequest& request = context.request;
   StarDetectorOptions options;
   options.dark = !request.stars_bright;
@@ -173,7 +173,6 @@ StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint
   const std::vector<DetectedStar> stars = DetectStars(context.image, options, &stats);
 
   StageOutput out;
-  out.rows = std::move(rows);
   int measured = 0, rejected = 0;
   for (const DetectedStar& star : stars) {
     measured += star.point.status == PointStatus::kMeasured;
@@ -184,8 +183,8 @@ StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint
     out.summary["width_model"] = WidthModelJson(stats.width_model, options.psf_fwhm_px);
     out.summary["noise_peaks_dropped"] = stats.noise_peaks;  // docs/stars.md step 4
     out.summary["noise_peak_level_sigma"] = stats.noise_peak_level_sigma;
-    out.rows.reserve(out.rows.size() + stars.size());
-    for (const DetectedStar& star : stars) out.rows.push_back(StarRow(star));
+    rows->reserve(rows->size() + stars.size());
+    for (const DetectedStar& star : stars) rows->push_back(StarRow(star));
     out.message = std::to_string(stars.size()) + " images";
     return out;
   }
@@ -208,7 +207,7 @@ StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint
   std::vector<bool> replaced(stars.size(), false);  // detections re-measured as a trail's dot
   for (const ForcedDot& f : forced)
     if (f.replaces >= 0) replaced[f.replaces] = true;
-  out.rows.reserve(out.rows.size() + stars.size() - std::count(replaced.begin(), replaced.end(), true) + forced.size());
+  rows->reserve(rows->size() + stars.size() - std::count(replaced.begin(), replaced.end(), true) + forced.size());
   std::map<std::string, long> unassigned;
   for (size_t i = 0; i < stars.size(); ++i) {
     if (replaced[i]) continue;
@@ -218,12 +217,12 @@ StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint
       const std::string why = TrailReasonName(t.reason);
       if (t.reason != TrailReason::kNotStar) row.flags.push_back("trail:" + why);
       unassigned[why]++;
-      out.rows.push_back(std::move(row));
+      rows->push_back(std::move(row));
       continue;
     }
-    out.rows.push_back(TrailRow(stars[i], t, linked, *start_utc));
+    rows->push_back(TrailRow(stars[i], t, linked, *start_utc));
   }
-  for (const ForcedDot& f : forced) out.rows.push_back(TrailRow(f.image, f.tag, linked, *start_utc));
+  for (const ForcedDot& f : forced) rows->push_back(TrailRow(f.image, f.tag, linked, *start_utc));
   nlohmann::json reasons = nlohmann::json::object();
   for (const auto& [reason, n] : unassigned) reasons[reason] = n;
   long decoded = 0;

@@ -33,16 +33,15 @@ struct DetectContext {
 };
 
 struct StageOutput {
-  std::vector<MeasuredPoint> rows;  // pixel columns filled
   nlohmann::json summary;           // stored under the stage's key in <scan>.detect.json
   std::string message;              // one console line, without the newline
 };
 
 // Stars (kind star) and, with request.trails, the duty-cycle trails (kinds trail_dot, trail_dash).
-// Each stage appends its rows to `rows` (the rows measured so far, moved in and returned as out.rows) so a
-// plate's hundreds of thousands of rows are never held twice.
-StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint> rows);
+// Each stage appends its rows (pixel columns filled) to the file's `rows`: a plate's hundreds of thousands
+// of rows are never held twice.
+StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint>* rows);
 // Passpoints (kind passpoint) as request.passpoints defines them.
-StageOutput RunPasspointStage(const DetectContext& context, std::vector<MeasuredPoint> rows);
+StageOutput RunPasspointStage(const DetectContext& context, std::vector<MeasuredPoint>* rows);
 
 }  // namespace platemeter::pipeline

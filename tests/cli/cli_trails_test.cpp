@@ -32,19 +32,18 @@ using testing::TempDir;
 using testing::OrbigonTrailSpec;
 using testing::SecondsAfter0530;
 
-// The value of a flag "name=value" of a row, if it has one.
-std::optional<double> FlagValue(const MeasuredPoint& m, const std::string& name) {
-  for (const std::string& f : m.flags)
-    if (f.size() > name.size() && f.compare(0, name.size() + 1, name + "=") == 0)
-      return std::stod(f.substr(name.size() + 1));
-  return std::nullopt;
-}
-
 // The text of a flag "name=text" of a row, "" if it has none.
 std::string FlagText(const MeasuredPoint& m, const std::string& name) {
   for (const std::string& f : m.flags)
     if (f.size() > name.size() && f.compare(0, name.size() + 1, name + "=") == 0) return f.substr(name.size() + 1);
   return "";
+}
+
+// The value of a flag "name=value" of a row, if it has one.
+std::optional<double> FlagValue(const MeasuredPoint& m, const std::string& name) {
+  const std::string text = FlagText(m, name);
+  if (text.empty()) return std::nullopt;
+  return std::stod(text);
 }
 
 TEST(CliTrails, DetectWritesTimeTaggedTrailDotsThatMatchTheTruth) {

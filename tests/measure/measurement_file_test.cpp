@@ -170,8 +170,7 @@ TEST(MeasurementFile, AWriteRefusedLateLeavesTheEarlierFileAndNoTemporary) {
     EXPECT_EQ(e.subject(), path);
     EXPECT_EQ(e.reason(), "duplicate point star 'S99999'");
   }
-  std::ifstream in(path, std::ios::binary);
-  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), before);
+  EXPECT_EQ(testing::ReadTextFile(path), before);
   EXPECT_EQ(EntriesIn(dir.path()), 1);
 }
 

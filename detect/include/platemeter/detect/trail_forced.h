@@ -53,7 +53,7 @@ struct ForcedDotStats {
   long tried = 0;      // dot exposures without an image within a trail's reach (MeasureMissingDots)
   long outside = 0;    // off the scan or the exposed format (with the fit window)
   long crowded = 0;    // another image, or another trail's predicted dot, within isolation_fwhm
-  long clipped = 0;    // a clipped (saturated) pixel in the fit window
+  long clipped = 0;    // a clipped (saturated) pixel within window_fwhm FWHM of the dot's sweep
   long failed = 0;     // the fit did not converge
   long faint = 0;      // below min_snr
   long off_place = 0;  // the fitted centre off the prediction

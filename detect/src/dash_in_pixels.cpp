@@ -112,10 +112,9 @@ DashInPixels MeasureDashInPixels(const ScanPixels& scan, const DashPlace& dash, 
       !detect_internal::ReadContrast(scan, rect, &pixels, &clipped))
     return out;
   // (a saturated neighbour's core is left out; light of the dash's own lost there would read as less)
-  for (const PixelPoint& q : clipped)
-    if (detect_internal::ToSweep_px(q, dash.centre_px, dash.angle_rad, dash.length_px) <=
-        o.clear_of_clipped_fwhm * dash.fwhm_px)
-      return out;
+  if (!detect_internal::ClearOfClipped(clipped, dash.centre_px, dash.angle_rad, dash.length_px,
+                                       o.clear_of_clipped_fwhm * dash.fwhm_px))
+    return out;
   const FluxFit fit = FitFluxes(pixels, Templates(dash, rect, images, o));
   if (!fit.ok) return out;
 

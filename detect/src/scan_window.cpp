@@ -47,6 +47,13 @@ double ToSweep_px(const PixelPoint& p, const PixelPoint& centre, double angle_ra
   return std::hypot(dx - along * c, dy - along * s);
 }
 
+bool ClearOfClipped(const std::vector<PixelPoint>& clipped, const PixelPoint& centre, double angle_rad,
+                    double length_px, double clear_px) {
+  return std::none_of(clipped.begin(), clipped.end(), [&](const PixelPoint& q) {
+    return ToSweep_px(q, centre, angle_rad, length_px) <= clear_px;
+  });
+}
+
 star_internal::FittedSegment ModelOf(const DetectedStar& d) {
   star_internal::FittedSegment m;
   m.x_px = d.point.position_px.x_px, m.y_px = d.point.position_px.y_px;

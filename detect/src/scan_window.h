@@ -23,6 +23,11 @@ bool ReadContrast(const ScanPixels& scan, const PixelRect& rect, std::vector<sta
 // Distance from p to a sweep: the segment of length_px along angle_rad about centre.
 double ToSweep_px(const PixelPoint& p, const PixelPoint& centre, double angle_rad, double length_px);
 
+// Whether every clipped pixel lies farther than clear_px from the sweep: a saturated neighbour's core that
+// near would take the sweep's own light with it.
+bool ClearOfClipped(const std::vector<PixelPoint>& clipped, const PixelPoint& centre, double angle_rad,
+                    double length_px, double clear_px);
+
 // A detected image as the detector fitted it (a point image is a segment of length 0).
 star_internal::FittedSegment ModelOf(const DetectedStar& d);
 

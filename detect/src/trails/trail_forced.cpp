@@ -119,9 +119,8 @@ MeasuredDot MeasureDot(const ScanPixels& scan, const ForcedCandidate& c, const F
   // window's inscribed circle about its sweep, and without the pixels within kClippedMaskFwhm of them (the
   // benchmark plate: +16 dots right, nothing wrong, RMS(error / sigma) unchanged; refused at any clipped
   // pixel before).
-  for (const PixelPoint& q : clipped)
-    if (detect_internal::ToSweep_px(q, c.predicted, c.angle_rad, c.length_px) < o.window_fwhm * c.fwhm_px)
-      return Refused(Outcome::kClipped);
+  if (!detect_internal::ClearOfClipped(clipped, c.predicted, c.angle_rad, c.length_px, o.window_fwhm * c.fwhm_px))
+    return Refused(Outcome::kClipped);
   std::erase_if(pixels, [&](const star_internal::FitPixel& px) {
     return std::any_of(clipped.begin(), clipped.end(), [&](const PixelPoint& q) {
       return std::hypot(px.x_px - q.x_px, px.y_px - q.y_px) < kClippedMaskFwhm * c.fwhm_px;

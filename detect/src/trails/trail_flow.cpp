@@ -157,7 +157,9 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   // group of evenly spaced dots of another star on nearly the same diurnal arc, at the place of a
   // neighbouring trail under a reading shifted by a break, lines up with no dash (whole plate: a lone
   // trail read under the next number so, 15 wrong tags) -- unless its images sit at the first trail's
-  // offset (kSameOffset_px) and show two dot groups (another star's group lines up within one).
+  // offset (kSameOffset_px) and show two dot groups (another star's group lines up within one). The seed
+  // is not that dash: every reading puts it at a dash place, so it shows no phase (Denver: a twin path's
+  // dash read under the next trail, 4 dots of the twin its "second trail", 13 wrong tags).
   auto evidence = [&](const FlowStar& s, double t_origin_s) {
     const size_t n = s.taken.size();
     std::vector<int> images(n, 0), dots(n, 0), dashes(n, 0), any_dots(n, 0);
@@ -167,7 +169,10 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
         any_dots[t] += dot;
         if (!IsEvidence(c, i)) continue;
         ++images[t];
-        (dot ? dots : dashes)[t]++;
+        if (dot)
+          ++dots[t];
+        else
+          dashes[t] += i != dash;
       }
     Evidence ev;
     const int top = static_cast<int>(std::max_element(images.begin(), images.end()) - images.begin());

@@ -6,13 +6,13 @@
 
 #include <cmath>
 #include <cstdio>
-#include <numeric>
 #include <vector>
 
 #include "../detect/src/trails/evidence.h"
 #include "../detect/src/trails/trail_internal.h"
 #include "platemeter/core/duty_cycle.h"
 #include "platemeter/detect/sky_flow.h"
+#include "support/trail_hand_plate.h"
 
 namespace platemeter {
 namespace {
@@ -58,26 +58,11 @@ struct HandStar {
 
 // The places of the star's readings: the seed (its first dash) read at seed_s.
 DashPlaces Places(const HandStar& star, double seed_s) {
-  TrailOptions o;
-  o.psf_fwhm_px = kFwhm_px;
-  Context c{star.images, o, {}, {}, {}, true, {}, {}, nullptr};
-  c.per_trail.resize(4);
-  for (const ShutterExposure& e : star.schedule) c.per_trail[e.trail - 1].push_back(e);
-  for (const DetectedStar& d : star.images) c.p.push_back(d.point.position_px);
-  c.usable.assign(star.images.size(), true);
-  c.elongated.assign(star.images.size(), false);
-  std::vector<int> ids(star.images.size());
-  std::iota(ids.begin(), ids.end(), 0);
-  const Grid all(c.p, ids, 32.0);
-  // A uniform flow fitted from samples over the plate (degree 1).
-  std::vector<PixelPoint> p, v;
-  for (double x = 0; x <= 6000; x += 1000)
-    for (double y = 0; y <= 6000; y += 1000) p.push_back({x, y}), v.push_back(kVelocity_px_per_s);
-  SkyFlow flow;
-  EXPECT_TRUE(flow.Fit(p, v, 1));
+  const test::HandContext hand(star.images, star.schedule, kFwhm_px, kVelocity_px_per_s);
+  EXPECT_TRUE(hand.flow_ok);
   const double span_s = star.schedule.back().mid_s - star.schedule.front().mid_s;
-  const FlowPath path(flow, star.origin, span_s);
-  return ReadingPlaces(c, all, path, star.origin, seed_s, kFluxPerS, [&](int i) { return star.trail_of[i]; });
+  const FlowPath path(hand.flow, star.origin, span_s);
+  return ReadingPlaces(hand.c, hand.all, path, star.origin, seed_s, kFluxPerS, [&](int i) { return star.trail_of[i]; });
 }
 
 TEST(ReadingPlaces, ARightReadingFindsItsDashPlacesHeld) {

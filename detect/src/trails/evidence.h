@@ -34,6 +34,9 @@ inline constexpr int kSlowFirst = 12, kSlowSecondTrailDots = 8, kSlowDurations =
 inline constexpr int kSecondTrailDots = 4;
 // A candidate (a second one makes the decision ambiguous): a trail of 5 and 3 dots of another.
 inline constexpr int kCandidateFirst = 5, kCandidateDots = 3;
+// A seed may be two stars' dashes merged: its readings are also tried with this share of its flux (two dashes
+// of like flux; the flux tolerance covers shares of about 0.35-0.65), as candidates only.
+inline constexpr double kMergedSeedShare = 0.5;
 // A second trail without a dash of its own counts (crowds hide dashes) with this many dots of two groups at
 // the first trail's offset, within kSameOffset_px: the seed's own position error shifts a right reading's
 // predictions alike everywhere (whole V <= 8 plate: of 209 unique readings' dashless second trails, 193

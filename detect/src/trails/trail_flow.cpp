@@ -221,7 +221,22 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
             ImagesFluxPerSecond(c, CollectAlongFlow(c, all, path, p, e.mid_s, 0.0, every_trail, excluded), dash);
         if (!(reading_flux_per_s > 0)) continue;
       }
-      if (CollectAlongFlow(c, all, path, p, e.mid_s, reading_flux_per_s, own, excluded).hits < kOwnTrailImages) continue;
+      // The seed read as one of two stars' dashes merged into one image: two stars on one diurnal path whose
+      // times differ by the spacing of two of the program's dashes lie on one place at those dashes, in every
+      // trail. Read with the merge's whole flux, a reading one dot group off lines up the brighter durations
+      // of the next group; read with the share of one star, the seed finds that star's own images. That
+      // reading, a candidate, leaves the decision ambiguous (Denver: two such stars, 8 wrong tags).
+      bool merged_candidate = false;
+      const double share_flux_per_s = kMergedSeedShare * reading_flux_per_s;
+      if (!blended && CollectAlongFlow(c, all, path, p, e.mid_s, share_flux_per_s, own, excluded).hits >= kOwnTrailImages) {
+        const Evidence share =
+            evidence(CollectAlongFlow(c, all, path, p, e.mid_s, share_flux_per_s, every_trail, excluded), e.mid_s);
+        merged_candidate = share.any_first >= kCandidateFirst && share.any_second_dots >= kCandidateDots;
+      }
+      if (CollectAlongFlow(c, all, path, p, e.mid_s, reading_flux_per_s, own, excluded).hits < kOwnTrailImages) {
+        readings += merged_candidate;
+        continue;
+      }
       FlowStar s = CollectAlongFlow(c, all, path, p, e.mid_s, reading_flux_per_s, every_trail, excluded);
       // The dash itself must be taken as that exposure (alone within the tolerance); a blended seed's flux
       // may fail the reading's: then no other image may be taken there, and the seed joins the reading.
@@ -241,7 +256,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       const bool second = ev.second_dots >= need_second_dots ||
                           (crowded && ev.same_offset_dashless >= kDashlessDots);
       const bool decoded = self && ev.first >= need_first && second;
-      readings += candidate || decoded;
+      readings += candidate || decoded || merged_candidate;  // (one timing counts once)
       if (!decoded) continue;
       // Dashes besides the seed: a seed merged with another image (twice its flux) reads the star's 1.2 s
       // dots as 0.6 s ones, its 10 s dots as 6.2 s ones; its own dashes, half the flux expected then, are

@@ -51,6 +51,67 @@ double ImagesFluxPerSecond(const Context& c, const FlowStar& s, int seed) {
   std::erase_if(rate_dn_per_s, [](double r) { return !(r > 0); });
   return rate_dn_per_s.size() < static_cast<size_t>(kMinFluxImages) ? 0.0 : detect_internal::Median(rate_dn_per_s);
 }
+
+// DecodeByFlow's evidence of a reading (its images `s`, the seed `dash` at t_origin_s). Decoded: a trail of
+// flow_min_images and a second one holding more dots than a wrong reading lines up (without a dash: more,
+// at the first trail's offset; below).
+// A candidate (another one makes the decision ambiguous): a trail of 5 and a second one with 3 dots.
+// Evidence of a reading: the trail with the most images, and the dots of the next best trail. A wrong
+// reading lines up one trail of the star (the trails' dot programs are shifted 30 s against each other)
+// and at most 2 dots of any other (docs/trails.md, "The plate's flow": the schedule's own shifts), except
+// the two readings 120 s off, which line up 8 dots of every trail (and so are always candidates).
+struct Evidence {
+  int first = 0, second_images = 0, second_dots = 0;  // evidence (IsEvidence; a second trail with a dash)
+  int same_offset_dashless = 0;  // ... of a second trail, dash or not, at the first trail's offset, 2 groups
+  int any_first = 0, any_second_dots = 0;  // every image taken (the ambiguity test's candidates)
+};
+// A second trail must show a dash of its own (a separator: the brightest images of its program): a
+// group of evenly spaced dots of another star on nearly the same diurnal arc, at the place of a
+// neighbouring trail under a reading shifted by a break, lines up with no dash (whole plate: a lone
+// trail read under the next number so, 15 wrong tags) -- unless its images sit at the first trail's
+// offset (kSameOffset_px) and show two dot groups (another star's group lines up within one). The seed
+// is not that dash: every reading puts it at a dash place, so it shows no phase (Denver: a twin path's
+// dash read under the next trail, 4 dots of the twin its "second trail", 13 wrong tags).
+Evidence ReadingEvidence(const Context& c, const FlowPath& path, const FlowStar& s, double t_origin_s, int dash) {
+  const size_t n = s.taken.size();
+  std::vector<int> images(n, 0), dots(n, 0), dashes(n, 0), any_dots(n, 0);
+  for (size_t t = 0; t < n; ++t)
+    for (const auto& [j, i] : s.taken[t]) {
+      const bool dot = c.per_trail[t][j].kind == ExposureKind::kDot;
+      any_dots[t] += dot;
+      if (!IsEvidence(c, i)) continue;
+      ++images[t];
+      if (dot)
+        ++dots[t];
+      else
+        dashes[t] += i != dash;
+    }
+  Evidence ev;
+  const int top = static_cast<int>(std::max_element(images.begin(), images.end()) - images.begin());
+  ev.first = images[top];
+  for (size_t t = 0; t < n; ++t) {
+    if (static_cast<int>(t) == top || dashes[t] < 1) continue;
+    if (dots[t] > ev.second_dots || (dots[t] == ev.second_dots && images[t] > ev.second_images))
+      ev.second_dots = dots[t], ev.second_images = images[t];
+  }
+  const PixelPoint top_offset = MedianOffset(c, path, s.taken[top], top, t_origin_s);
+  for (size_t t = 0; t < n; ++t) {
+    if (static_cast<int>(t) == top || dots[t] < kDashlessDots) continue;
+    if (Dist(MedianOffset(c, path, s.taken[t], t, t_origin_s), top_offset) > kSameOffset_px) continue;
+    std::vector<double> groups;
+    for (const auto& [j, i] : s.taken[t])
+      if (c.per_trail[t][j].kind == ExposureKind::kDot && IsEvidence(c, i)) groups.push_back(c.per_trail[t][j].group);
+    if (DistinctCount(groups) >= 2) ev.same_offset_dashless = std::max(ev.same_offset_dashless, dots[t]);
+  }
+  int any_top = 0;
+  for (size_t t = 0; t < n; ++t)
+    if (s.taken[t].size() > s.taken[any_top].size()) any_top = static_cast<int>(t);
+  ev.any_first = static_cast<int>(s.taken[any_top].size());
+  for (size_t t = 0; t < n; ++t)
+    if (static_cast<int>(t) != any_top) ev.any_second_dots = std::max(ev.any_second_dots, any_dots[t]);
+  return ev;
+}
+
 }  // namespace
 
 void AddFlowSamples(const Track& track, const std::vector<double>& t_s, std::vector<PixelPoint>* p,
@@ -141,64 +202,6 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
   const bool crowded = o.ablation.flow_crowded_readings && !slow;  // the crowd's weaker evidence (below)
   const FlowPath path = PlatePath(c, flow, p);
   const unsigned every_trail = (1u << c.per_trail.size()) - 1u;
-  // Decoded: a trail of flow_min_images and a second one holding more dots than a wrong reading lines up
-  // (without a dash: more, at the first trail's offset; below).
-  // A candidate (another one makes the decision ambiguous): a trail of 5 and a second one with 3 dots.
-  // Evidence of a reading: the trail with the most images, and the dots of the next best trail. A wrong
-  // reading lines up one trail of the star (the trails' dot programs are shifted 30 s against each other)
-  // and at most 2 dots of any other (docs/trails.md, "The plate's flow": the schedule's own shifts), except
-  // the two readings 120 s off, which line up 8 dots of every trail (and so are always candidates).
-  struct Evidence {
-    int first = 0, second_images = 0, second_dots = 0;  // evidence (IsEvidence; a second trail with a dash)
-    int same_offset_dashless = 0;  // ... of a second trail, dash or not, at the first trail's offset, 2 groups
-    int any_first = 0, any_second_dots = 0;  // every image taken (the ambiguity test's candidates)
-  };
-  // A second trail must show a dash of its own (a separator: the brightest images of its program): a
-  // group of evenly spaced dots of another star on nearly the same diurnal arc, at the place of a
-  // neighbouring trail under a reading shifted by a break, lines up with no dash (whole plate: a lone
-  // trail read under the next number so, 15 wrong tags) -- unless its images sit at the first trail's
-  // offset (kSameOffset_px) and show two dot groups (another star's group lines up within one). The seed
-  // is not that dash: every reading puts it at a dash place, so it shows no phase (Denver: a twin path's
-  // dash read under the next trail, 4 dots of the twin its "second trail", 13 wrong tags).
-  auto evidence = [&](const FlowStar& s, double t_origin_s) {
-    const size_t n = s.taken.size();
-    std::vector<int> images(n, 0), dots(n, 0), dashes(n, 0), any_dots(n, 0);
-    for (size_t t = 0; t < n; ++t)
-      for (const auto& [j, i] : s.taken[t]) {
-        const bool dot = c.per_trail[t][j].kind == ExposureKind::kDot;
-        any_dots[t] += dot;
-        if (!IsEvidence(c, i)) continue;
-        ++images[t];
-        if (dot)
-          ++dots[t];
-        else
-          dashes[t] += i != dash;
-      }
-    Evidence ev;
-    const int top = static_cast<int>(std::max_element(images.begin(), images.end()) - images.begin());
-    ev.first = images[top];
-    for (size_t t = 0; t < n; ++t) {
-      if (static_cast<int>(t) == top || dashes[t] < 1) continue;
-      if (dots[t] > ev.second_dots || (dots[t] == ev.second_dots && images[t] > ev.second_images))
-        ev.second_dots = dots[t], ev.second_images = images[t];
-    }
-    const PixelPoint top_offset = MedianOffset(c, path, s.taken[top], top, t_origin_s);
-    for (size_t t = 0; t < n; ++t) {
-      if (static_cast<int>(t) == top || dots[t] < kDashlessDots) continue;
-      if (Dist(MedianOffset(c, path, s.taken[t], t, t_origin_s), top_offset) > kSameOffset_px) continue;
-      std::vector<double> groups;
-      for (const auto& [j, i] : s.taken[t])
-        if (c.per_trail[t][j].kind == ExposureKind::kDot && IsEvidence(c, i)) groups.push_back(c.per_trail[t][j].group);
-      if (DistinctCount(groups) >= 2) ev.same_offset_dashless = std::max(ev.same_offset_dashless, dots[t]);
-    }
-    int any_top = 0;
-    for (size_t t = 0; t < n; ++t)
-      if (s.taken[t].size() > s.taken[any_top].size()) any_top = static_cast<int>(t);
-    ev.any_first = static_cast<int>(s.taken[any_top].size());
-    for (size_t t = 0; t < n; ++t)
-      if (static_cast<int>(t) != any_top) ev.any_second_dots = std::max(ev.any_second_dots, any_dots[t]);
-    return ev;
-  };
   const int need_first = slow ? std::max(kSlowFirst, o.tuning.flow_min_images) : o.tuning.flow_min_images;
   const int need_second_dots = slow ? kSlowSecondTrailDots : kSecondTrailDots;
   const int need_durations = slow ? kSlowDurations : kDurations;
@@ -230,7 +233,8 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
       const double share_flux_per_s = kMergedSeedShare * reading_flux_per_s;
       if (!blended && CollectAlongFlow(c, all, path, p, e.mid_s, share_flux_per_s, own, excluded).hits >= kOwnTrailImages) {
         const Evidence share =
-            evidence(CollectAlongFlow(c, all, path, p, e.mid_s, share_flux_per_s, every_trail, excluded), e.mid_s);
+            ReadingEvidence(c, path, CollectAlongFlow(c, all, path, p, e.mid_s, share_flux_per_s, every_trail, excluded),
+                            e.mid_s, dash);
         merged_candidate = share.any_first >= kCandidateFirst && share.any_second_dots >= kCandidateDots;
       }
       if (CollectAlongFlow(c, all, path, p, e.mid_s, reading_flux_per_s, own, excluded).hits < kOwnTrailImages) {
@@ -251,7 +255,7 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
                          {j_seed, dash});
         ++s.hits, self = true;
       }
-      const Evidence ev = evidence(s, e.mid_s);
+      const Evidence ev = ReadingEvidence(c, path, s, e.mid_s, dash);
       const bool candidate = ev.any_first >= kCandidateFirst && ev.any_second_dots >= kCandidateDots;
       const bool second = ev.second_dots >= need_second_dots ||
                           (crowded && ev.same_offset_dashless >= kDashlessDots);

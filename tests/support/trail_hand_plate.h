@@ -22,7 +22,7 @@ struct HandContext {
   HandContext(const std::vector<DetectedStar>& images, const std::vector<ShutterExposure>& schedule, double fwhm_px,
               const PixelPoint& velocity_px_per_s)
       : o(Options(fwhm_px)), c{images, o, {}, {}, {}, true, {}, {}, nullptr}, ids(Ids(images.size())), all(Points(), ids, 32.0) {
-    c.per_trail.resize(4);
+    c.per_trail.resize(schedule.empty() ? 0 : schedule.back().trail);  // (trails numbered 1.. in time order)
     for (const ShutterExposure& e : schedule) c.per_trail[e.trail - 1].push_back(e);
     c.usable.assign(images.size(), true);
     c.elongated.assign(images.size(), false);

@@ -62,6 +62,7 @@ TrailLinkResult TrailDecoder::Decode() {
     if (steps.grow_siblings) GrowSiblings();
   }
   if (steps.flow_trails) FlowTrails();
+  DropMergedImages();
   FormStars();
   return std::move(result_);
 }

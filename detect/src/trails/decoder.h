@@ -9,6 +9,7 @@
 //   SeparatorTrails   decoder_separators.cpp  6.   trails grown from a separator dash, numbered by a sibling
 //   FlowTrails        decoder_flow.cpp        7.   the plate's flow: missing trails, new stars, lone trails,
 //                     decoder_flow_fill.cpp        and exposures filled along it
+//   DropMergedImages  decoder_merged.cpp      8.   images holding more light than their star's exposure
 //   FormStars         decoder.cpp                  the result's stars and counts
 // Tags are given and taken back only by Tag, Untag and Refuse (decoder.cpp); the result's counts are counted
 // from the tags at the end (CountTags), so no step keeps a count of its own.
@@ -87,6 +88,8 @@ class TrailDecoder {
                      double flux_per_s) const;
   void FillTrailsAlongFlow();
   void FillMissingSiblings();
+  void DropMergedImages();
+  void RefitWithout(int k, const Taken& kept);
   void FormStars();
 
   // Chains and stars.

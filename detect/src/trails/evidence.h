@@ -37,6 +37,13 @@ inline constexpr int kCandidateFirst = 5, kCandidateDots = 3;
 // A seed may be two stars' dashes merged: its readings are also tried with this share of its flux (two dashes
 // of like flux; the flux tolerance covers shares of about 0.35-0.65), as candidates only.
 inline constexpr double kMergedSeedShare = 0.5;
+// An image's flux above its star's flux per second x its exposure length by more than this share (and 4 of
+// its flux sigmas) holds another image's light (decoder_merged.cpp). The plate-wide ratio of an image's flux
+// to its trail's flux per second x length has a p10-p90 spread of -2..+1 % for 20 s dashes and -4..+2 % for
+// 10 s dots (Miami): 10 % is several times that. The images so taken back were right to 1.5 px but far off
+// their sigmas (Denver: RMS(error / sigma) about 16 over 2049 such dots); 10, 15 and 25 % tagged the same
+// measurable dots right (+-2 on each tuning plate), and left Miami 0, 1 and 2 wrong tags.
+inline constexpr double kMergedFluxExcess = 0.10;
 // A second trail without a dash of its own counts (crowds hide dashes) with this many dots of two groups at
 // the first trail's offset, within kSameOffset_px: the seed's own position error shifts a right reading's
 // predictions alike everywhere (whole V <= 8 plate: of 209 unique readings' dashless second trails, 193

@@ -84,7 +84,7 @@ enum class TrailReason {
   kRunFlux,                  // the run's dashes' fluxes differ
   kOffTrack,                 // off its track amid other stars' images
   kUnverified,               // the track merely follows it (leverage)
-  kBlended,                  // a leading dash whose flux is not the run's
+  kBlended,                  // flux not its exposure's: a dash unlike its run, an image merged with another
   kUnjoined,                 // a grown sibling that does not join its source
   kUnresolvedRun,            // a slow star's run whose dashes merge
   kOffFlow,                  // a trail off the plate's flow

@@ -57,6 +57,10 @@ void TrailDecoder::DropMergedImages() {
 // flow's images keep their measured positions); refused when too few are left for it.
 void TrailDecoder::RefitWithout(int k, const Taken& kept) {
   TrailChain& tc = result_.chains[k];
+  if (kept.empty()) {
+    Refuse(k, TrailReason::kBlended);
+    return;
+  }
   Taken tracked;
   for (const auto& [j, i] : kept)
     if (!result_.images[i].flow_checked) tracked.push_back({j, i});

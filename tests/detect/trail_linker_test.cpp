@@ -375,8 +375,9 @@ TEST(TrailLinker, AnImageHoldingAnotherImagesLightIsNotTheStars) {
       (kept ? others_kept : others_lost)++;
     }
   }
-  for (size_t i = 0; i < found.size(); ++i)
+  for (size_t i = 0; i < found.size(); ++i) {
     if (r.images[i].assigned) EXPECT_TRUE(b.match[i] && TagsRight(r.images[i], *b.match[i])) << "image " << i;
+  }
   std::printf("[merged dots] %zu dots given a quarter more light 1 px along their track: %ld not tagged; their "
               "trails' other images kept %ld, lost %ld\n",
               merged.size(), refused, others_kept, others_lost);

@@ -21,10 +21,10 @@ namespace {
 
 using namespace trail_internal;
 
-constexpr double kFwhm_px = 2.0;
-constexpr double kFluxPerS = 1000.0;           // DN per second of exposure, both stars
-const PixelPoint kVelocity_px_per_s{0.05, 0.18};  // a slow star's (Denver's pair: 0.18 px/s)
-constexpr double kBehind_s = 1020.0;           // the second star's delay: a trail's separators 1 and 4 apart
+constexpr double kTwinFwhm_px = 2.0;
+constexpr double kTwinFluxPerS = 1000.0;           // DN per second of exposure, both stars
+const PixelPoint kTwinVelocity_px_per_s{0.05, 0.18};  // a slow star's (Denver's pair: 0.18 px/s)
+constexpr double kTwinBehind_s = 1020.0;           // the second star's delay: a trail's separators 1 and 4 apart
 
 struct TwinPlate {
   std::vector<ShutterExposure> schedule = BuildShutterSchedule(DutyCycleScheduleOptions{});
@@ -33,11 +33,11 @@ struct TwinPlate {
   std::vector<double> truth_s[2];  // per image: the mid time of its exposure for star 0 and 1 (NaN: not it)
 
   PixelPoint At(int star, double t_s) const {
-    const double dt = t_s - schedule.front().mid_s - (star == 1 ? kBehind_s : 0.0);
-    return {origin.x_px + kVelocity_px_per_s.x_px * dt, origin.y_px + kVelocity_px_per_s.y_px * dt};
+    const double dt = t_s - schedule.front().mid_s - (star == 1 ? kTwinBehind_s : 0.0);
+    return {origin.x_px + kTwinVelocity_px_per_s.x_px * dt, origin.y_px + kTwinVelocity_px_per_s.y_px * dt};
   }
   TwinPlate() {
-    const double speed = std::hypot(kVelocity_px_per_s.x_px, kVelocity_px_per_s.y_px);
+    const double speed = std::hypot(kTwinVelocity_px_per_s.x_px, kTwinVelocity_px_per_s.y_px);
     for (int star = 0; star < 2; ++star)
       for (const ShutterExposure& e : schedule) {
         const PixelPoint p = At(star, e.mid_s);
@@ -45,9 +45,9 @@ struct TwinPlate {
         // Where the other star's image lies on the same place, one image holds both (a merge).
         int merged = -1;
         for (size_t i = 0; i < images.size(); ++i)
-          if (Dist(images[i].point.position_px, p) < 0.5 * kFwhm_px) merged = static_cast<int>(i);
+          if (Dist(images[i].point.position_px, p) < 0.5 * kTwinFwhm_px) merged = static_cast<int>(i);
         if (merged >= 0) {
-          images[merged].flux_dn += kFluxPerS * e.duration_s;
+          images[merged].flux_dn += kTwinFluxPerS * e.duration_s;
           images[merged].sigma_flux_dn = 0.02 * images[merged].flux_dn;
           truth_s[star][merged] = e.mid_s;
           continue;
@@ -55,13 +55,13 @@ struct TwinPlate {
         DetectedStar d;
         d.point.position_px = p;
         d.point.status = PointStatus::kMeasured;
-        d.flux_dn = kFluxPerS * e.duration_s;
+        d.flux_dn = kTwinFluxPerS * e.duration_s;
         d.sigma_flux_dn = 0.02 * d.flux_dn;
         d.length_px = length_px;
-        d.angle_deg = std::atan2(kVelocity_px_per_s.y_px, kVelocity_px_per_s.x_px) * 180.0 / M_PI;
+        d.angle_deg = std::atan2(kTwinVelocity_px_per_s.y_px, kTwinVelocity_px_per_s.x_px) * 180.0 / M_PI;
         d.flags = length_px > 0 ? kStarElongated : 0u;
         images.push_back(d);
-        truth_s[star].push_back(star == 0 ? e.mid_s : std::nan(""));
+        truth_s[star].push_back(e.mid_s);
         truth_s[1 - star].push_back(std::nan(""));
       }
   }
@@ -69,7 +69,7 @@ struct TwinPlate {
 
 TEST(MergedSeed, ASeedOfTwoStarsDashesTagsNoStarAtAWrongTime) {
   const TwinPlate plate;
-  const test::HandContext hand(plate.images, plate.schedule, kFwhm_px, kVelocity_px_per_s);
+  const test::HandContext hand(plate.images, plate.schedule, kTwinFwhm_px, kTwinVelocity_px_per_s);
   ASSERT_TRUE(hand.flow_ok);
   const Context& c = hand.c;
 

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "decoder.h"
+#include "evidence.h"
 
 namespace platemeter::trail_internal {
 
@@ -64,8 +65,10 @@ bool TrailDecoder::Settle(int cid, const Taken& taken, int min_images) {
 // A bad image, or one off the track by more than tight_tolerance_px, with other images around it is likely
 // another star's (a crowded field): not tagged (kOffTrack). Alone, it is the trail's own displaced image:
 // tagged, flagged bad. An image the track merely follows (leverage above max_leverage: beyond a long gap at
-// the trail's end) cannot be checked: not tagged (kUnverified; the plate's flow may check it, step 7).
-// Repeated on the refitted track until nothing more is dropped (3 passes at most); false: refused.
+// the trail's end) cannot be checked: not tagged (kUnverified; the plate's flow may check it, step 7). A
+// flow trail's such images still count towards min_images: the flow found each at its predicted place (its
+// track keeps kMinFlowTrackImages of its own). Repeated on the refitted track until nothing more is dropped
+// (3 passes at most); false: refused.
 bool TrailDecoder::DropUnverifiable(int cid, Taken* kept, double median_residual_px, int min_images) {
   TrailChain& tc = result_.chains[cid];
   // A piece of a crowded clump fitted jointly with a neighbour (blended and crowded) may carry part of the
@@ -73,6 +76,8 @@ bool TrailDecoder::DropUnverifiable(int cid, Taken* kept, double median_residual
   // end pull the track onto themselves: each must lie on the track of the trail's other images (within 3
   // median residuals and 0.1 px, that track known there to a third of it); else it cannot be checked.
   const auto shared = [&](int i) { return (images_[i].flags & kStarCrowded) && (images_[i].flags & kStarBlended); };
+  const bool flow_trail = tc.decoded_by == TrailStep::kFlow;
+  int unverified = 0;  // dropped only because the track merely follows them
   for (int pass = 0; pass < 3; ++pass) {
     if (pass > 0) {  // the residuals of the refitted track
       bool any = false;
@@ -119,9 +124,10 @@ bool TrailDecoder::DropUnverifiable(int cid, Taken* kept, double median_residual
         const FitSigma sigma = FitSigmaOf(o_, images_[i]);
         chain_[cid].track.LeverageAt(ti.mid_s, sigma.x_px, sigma.y_px, &hx, &hy);
       }
-      const bool unverified = std::max(hx, hy) > o_.tuning.max_leverage;
-      if (crowded || unverified) {
-        Untag(i, unverified ? TrailReason::kUnverified : TrailReason::kOffTrack);
+      const bool follows = std::max(hx, hy) > o_.tuning.max_leverage;
+      if (crowded || follows) {
+        unverified += follows && !crowded;
+        Untag(i, follows ? TrailReason::kUnverified : TrailReason::kOffTrack);
         dropped = true;
         continue;
       }
@@ -133,7 +139,9 @@ bool TrailDecoder::DropUnverifiable(int cid, Taken* kept, double median_residual
     // the track without them
     tc.bad_images = 0;
     for (const auto& [j, i] : *kept) result_.images[i].bad = false, result_.images[i].reason = TrailReason::kNone;
-    if (static_cast<int>(kept->size()) < min_images || !FitTrail(c_, *kept, &tc, &result_.images, &chain_[cid].track)) {
+    const int n = static_cast<int>(kept->size());
+    const bool enough = flow_trail ? n + unverified >= min_images && n >= kMinFlowTrackImages : n >= min_images;
+    if (!enough || !FitTrail(c_, *kept, &tc, &result_.images, &chain_[cid].track)) {
       chain_[cid].kept = *kept;
       Refuse(cid, TrailReason::kOffTrack);
       return false;

@@ -44,6 +44,9 @@ inline constexpr double kMergedSeedShare = 0.5;
 // their sigmas (Denver: RMS(error / sigma) about 16 over 2049 such dots); 10, 15 and 25 % tagged the same
 // measurable dots right (+-2 on each tuning plate), and left Miami 0, 1 and 2 wrong tags.
 inline constexpr double kMergedFluxExcess = 0.10;
+// A flow trail's images that its track merely follows (leverage) still count towards flow_min_images (the
+// flow found each at its place); its track must keep this many of its own (a parabola's 3 with 3 to check it).
+inline constexpr int kMinFlowTrackImages = 6;
 // A second trail without a dash of its own counts (crowds hide dashes) with this many dots of two groups at
 // the first trail's offset, within kSameOffset_px: the seed's own position error shifts a right reading's
 // predictions alike everywhere (whole V <= 8 plate: of 209 unique readings' dashless second trails, 193

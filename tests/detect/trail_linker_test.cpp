@@ -284,7 +284,8 @@ std::map<int, size_t> OneDotPerTrail(const BandRun& b, int dot_index, double min
   for (size_t i = 0; i < b.found.size(); ++i) {
     const TrailImage& ti = b.r.images[i];
     if (!ti.assigned || ti.bad || ti.kind != ExposureKind::kDot || ti.dot_index != dot_index || !b.match[i] ||
-        !b.inside.at(b.match[i]->star_id + b.match[i]->trail) || b.found[i].flux_dn < min_snr * b.found[i].sigma_flux_dn)
+        !b.inside.at(b.match[i]->star_id + b.match[i]->trail) ||
+        b.found[i].flux_dn < min_snr * b.found[i].sigma_flux_dn)
       continue;
     dots[ti.chain] = i;
   }

@@ -52,8 +52,8 @@ double ImagesFluxPerSecond(const Context& c, const FlowStar& s, int seed) {
   return rate_dn_per_s.size() < static_cast<size_t>(kMinFluxImages) ? 0.0 : detect_internal::Median(rate_dn_per_s);
 }
 
-// Whether the seed holds more than the reading's images' flux per second x its exposure length (kMergedFluxExcess
-// and 4 of its flux sigmas): another image's light merged into it.
+// Whether the seed holds more than the reading's images' flux per second x its exposure length
+// (kMergedFluxExcess and 4 of its flux sigmas): another image's light merged into it.
 bool SeedMerged(const Context& c, const FlowStar& s, int seed, double duration_s) {
   const double expect_dn = ImagesFluxPerSecond(c, s, seed) * duration_s;
   const DetectedStar& d = c.images[seed];
@@ -286,10 +286,10 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
                             (cover.durations >= kOneDashDurations ||
                              (cover.durations >= kDurations && ratio > kMinFluxRatio && ratio < 1.0 / kMinFluxRatio));
       if (!usual && (blended || !(crowded && (many_dashes || one_dash)))) continue;  // (not a blended seed's flux)
-      // A seed holding more light than the reading's images give its exposure is merged with another image (a
-      // slow star's separator run into its next dot: 1.25 times a dash). The reading its flux times lines up
-      // the star's dots one late, with the other trails' merged separators as its dashes (Denver: 14 wrong
-      // tags once flow trails kept their unverified images).
+      // A seed holding more light than the reading's images give its exposure is merged with another image.
+      // Read with its own flux it lines up brighter or later dots (Denver: KS12778's D21s, each merged with
+      // another image, 1.25 times a dash; one read as a dash timed the star's dots one late, the other trails'
+      // merged D21s its dashes: 14 wrong tags once flow trails kept their unverified images).
       if (!blended && SeedMerged(c, s, dash, e.duration_s)) continue;
       s.seed_s = e.mid_s;
       best = std::move(s);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <map>
 
+#include "../median.h"
 #include "decoder.h"
 #include "evidence.h"
 
@@ -19,9 +20,7 @@ double StarFluxPerSecond(const Context& c, const std::vector<std::pair<int, doub
     const DetectedStar& d = c.images[i];
     if (d.flux_dn > 0 && !(d.flags & (kStarSaturated | kStarCrowded))) rates.push_back(d.flux_dn / duration_s);
   }
-  if (static_cast<int>(rates.size()) < kMinFluxImages) return 0.0;
-  std::nth_element(rates.begin(), rates.begin() + rates.size() / 2, rates.end());
-  return rates[rates.size() / 2];
+  return static_cast<int>(rates.size()) < kMinFluxImages ? 0.0 : detect_internal::Median(rates);
 }
 
 }  // namespace
@@ -41,8 +40,7 @@ void TrailDecoder::DropMergedImages() {
       const std::vector<ShutterExposure>& ex = c_.per_trail[result_.chains[k].trail - 1];
       Taken kept;
       for (const auto& [j, i] : chain_[k].kept) {
-        const double expect_dn = flux_per_s * ex[j].duration_s;
-        if (images_[i].flux_dn - expect_dn > kMergedFluxExcess * expect_dn + 4.0 * images_[i].sigma_flux_dn)
+        if (HoldsMergedLight(images_[i].flux_dn, images_[i].sigma_flux_dn, flux_per_s * ex[j].duration_s))
           Untag(i, TrailReason::kBlended);
         else
           kept.push_back({j, i});

@@ -44,6 +44,10 @@ inline constexpr double kMergedSeedShare = 0.5;
 // their sigmas (Denver: RMS(error / sigma) about 16 over 2049 such dots); 10, 15 and 25 % tagged the same
 // measurable dots right (+-2 on each tuning plate), and left Miami 0, 1 and 2 wrong tags.
 inline constexpr double kMergedFluxExcess = 0.10;
+// Whether an image of flux_dn (sigma_flux_dn) holds more than expect_dn by that share and 4 sigmas.
+inline bool HoldsMergedLight(double flux_dn, double sigma_flux_dn, double expect_dn) {
+  return expect_dn > 0 && flux_dn - expect_dn > kMergedFluxExcess * expect_dn + 4.0 * sigma_flux_dn;
+}
 // A flow trail's images that its track merely follows (leverage) still count towards flow_min_images (the
 // flow found each at its place); its track must keep this many of its own (a parabola's 3 with 3 to check it).
 inline constexpr int kMinFlowTrackImages = 6;

@@ -55,9 +55,8 @@ double ImagesFluxPerSecond(const Context& c, const FlowStar& s, int seed) {
 // Whether the seed holds more than the reading's images' flux per second x its exposure length
 // (kMergedFluxExcess and 4 of its flux sigmas): another image's light merged into it.
 bool SeedMerged(const Context& c, const FlowStar& s, int seed, double duration_s) {
-  const double expect_dn = ImagesFluxPerSecond(c, s, seed) * duration_s;
   const DetectedStar& d = c.images[seed];
-  return expect_dn > 0 && d.flux_dn - expect_dn > kMergedFluxExcess * expect_dn + 4.0 * d.sigma_flux_dn;
+  return HoldsMergedLight(d.flux_dn, d.sigma_flux_dn, ImagesFluxPerSecond(c, s, seed) * duration_s);
 }
 
 // DecodeByFlow's evidence of a reading (its images `s`, the seed `dash` at t_origin_s). Decoded: a trail of

@@ -9,12 +9,14 @@
 //
 //   bench_trails [--plate NAME | --family tune|report|all] [--pixel-um 20] [--mag-limit 8] [--rows N]
 //                [--min-snr 10] [--keep DIR [--reuse | --rescore]] [--no-sep] [--lost FILE] [--crosses-only]
-//                [--platemeter PATH] [--list]
+//                [--platemeter PATH] [--truth-near X,Y[;X,Y...]] [--list]
 //   --reuse keeps a kept scan (the render is deterministic); --rescore also a kept detection (scores it again).
 //   --plate NAME runs one plate of the family (trail_plates.h; --list shows them), default the benchmark plate
 //   (Beltsville, 12 May 1972); --family runs the tuning plates, the held-out ones or all, and prints a summary.
 //   --pixel-um, --mag-limit, --sensor-dn and --grain-dn override the plate's.
 //   --platemeter PATH detects with that binary (a copy of another build: two builds compared on the same scans)
+//   --truth-near X,Y;... lists the simulator's images within 6 px of those scan places (with --rescore: what
+//   lies where a decoding went wrong)
 //   --crosses-only detects and scores the reseau crosses only, in seconds.
 //   --rows N renders only N rows through the middle of the plate (trails cut by
 //   the band's edges are not counted); default the whole plate.
@@ -55,6 +57,8 @@ using platemeter::bench::ToolRun;
 
 using namespace platemeter;
 namespace fs = std::filesystem;
+
+constexpr double kTruthNear_px = 6.0;  // --truth-near's reach
 
 // Seconds of `iso` after `start_utc`.
 double Seconds(const std::string& iso, const std::string& start_utc) {
@@ -159,6 +163,7 @@ struct RunSettings {
   FILE* lost_out = nullptr;  // --lost FILE
   std::string bench_stars;   // bench_stars' path (SEP's child mode)
   std::string platemeter = PLATEMETER_BIN;  // --platemeter PATH: another build's binary (a copy, to compare builds)
+  std::vector<PixelPoint> truth_near;        // --truth-near X,Y[;X,Y...]: list the truth images about these places
 };
 
 // The plate's truth, reduced to what the score needs.
@@ -559,6 +564,13 @@ PlateScore RunPlate(const bench::TrailPlate& plate, const RunSettings& run) {
   PlateTruth truth = RenderPlate(plate, run, scan);
   malloc_trim(0);
   const DotCounting counting(truth.images, truth, plate, run);
+  // (what lies at a place a decoding went wrong at, when the detections do not say: another star's dash, a dot)
+  for (const PixelPoint& q : run.truth_near)
+    for (const TruthImage& t : truth.images)
+      if (std::hypot(t.x_px - q.x_px, t.y_px - q.y_px) < kTruthNear_px)
+        std::printf("truth near %.1f %.1f: %s T%d %c%d at %.3f %.3f, t = %.1f s, SNR %.0f, %.1f px long\n", q.x_px,
+                    q.y_px, truth.star_names[t.star].c_str(), t.trail, t.dot ? 'D' : 'L', t.index, t.x_px, t.y_px,
+                    t.mid_s, t.snr, t.length_px);
   long whole_dots = 0;
   for (const TruthImage& t : truth.images) whole_dots += counting.Whole(t), score.measurable += counting.Counted(t);
   std::printf("dots of whole trails: %ld; measurable (SNR >= %.0f, isolated by %.1f FWHM): %ld\n", whole_dots,
@@ -652,7 +664,8 @@ void PrintFamilySummary(const std::vector<bench::TrailPlate>& plates, const std:
   std::fprintf(stderr,
                "usage: bench_trails [--plate NAME | --family tune|report|all] [--pixel-um UM] [--mag-limit V] [--rows N] "
                "[--min-snr 10] [--isolation-fwhm 3] [--ref-peak-dn DN] [--sensor-dn DN] [--grain-dn DN] "
-               "[--keep DIR [--reuse | --rescore]] [--no-sep] [--lost FILE] [--crosses-only] [--platemeter PATH] [--list]\n");
+               "[--keep DIR [--reuse | --rescore]] [--no-sep] [--lost FILE] [--crosses-only] [--platemeter PATH] "
+               "[--truth-near X,Y[;X,Y...]] [--list]\n");
   std::exit(2);
 }
 
@@ -689,6 +702,16 @@ int main(int argc, char** argv) {
     else if (a == "--rescore") run.reuse = run.rescore = true;
     else if (a == "--lost") lost_file = next();
     else if (a == "--platemeter") run.platemeter = next();
+    else if (a == "--truth-near") {
+      const std::string places = next();
+      for (size_t from = 0; from < places.size();) {
+        const size_t to = std::min(places.find(';', from), places.size());
+        PixelPoint q;
+        if (std::sscanf(places.substr(from, to - from).c_str(), "%lf,%lf", &q.x_px, &q.y_px) != 2) Usage();
+        run.truth_near.push_back(q);
+        from = to + 1;
+      }
+    }
     else if (a == "--list") {
       for (const bench::TrailPlate& p : bench::TrailPlateFamily())
         std::printf("%-22s %-6s lat %5.1f start %s roll %5.0f axis alt %4.0f az %4.0f pixel %4.1f um FWHM %.2f px "

@@ -164,6 +164,28 @@ TEST(DashInPixels, AnotherDashHalfADashAlongTheTrackIsNoDash) {
   EXPECT_FALSE(seen.absent);
 }
 
+TEST(DashInPixels, AnotherStarsBrighterDashBesideTheTrackIsNoDash) {
+  // Another star's dash on a nearly parallel path, 1.6 times the dash's flux, 0.8 FWHM beside the track (Cairo:
+  // KS7763's dash before KS13496's run). Its light spreads over all three thirds, but a detection holding the
+  // dash merged with another image of a third of its light would lie within a third of a FWHM of the track:
+  // this one is another star's image, modelled, and the place shows no dash.
+  ImageBuffer image;
+  const PixelPoint f = Along(0.3, 0.8 * kFwhm_px);
+  image.Add(f.x_px, f.y_px, kDashLength_px, kAngle_rad, 1.6 * kDashFlux_dn);
+  image.AddNoise(8);
+  const DetectedStar other = Detection(f.x_px, f.y_px, kDashLength_px, kAngle_rad, 1.6 * kDashFlux_dn);
+  DashPlace place = Place();
+  place.tolerance_px = 0.4;  // the flow's
+  const DashInPixels seen = MeasureDashInPixels(image.Scan(), place, {other});
+  ASSERT_TRUE(seen.measured);
+  EXPECT_EQ(seen.modelled, 1);
+  EXPECT_FALSE(seen.shown);
+  EXPECT_FALSE(seen.absent);  // (its light overlaps the dash's: no place to call empty either)
+  // Where the flow put the place 1 px off the track, the detection may be the dash merged: asked about.
+  place.tolerance_px = 1.0;
+  EXPECT_EQ(MeasureDashInPixels(image.Scan(), place, {other}).modelled, 0);
+}
+
 TEST(DashInPixels, ADetectionThatMayHoldTheDashLeavesItUndecided) {
   // The dash merged with a point image of its flux 3 px beside it into one broad detection (FWHM 3.5 px),
   // centred 2.2 px off the track: off the sweep, so it is modelled, its flux free, and its model may take

@@ -73,6 +73,7 @@ DashInPixels DashInScan(const Context& c, const Grid& all, const FlowPath& path,
   place.length_px = dash_length_px;
   place.fwhm_px = c.o.psf_fwhm_px;
   place.flux_dn = dash_flux_dn;
+  place.tolerance_px = FlowTolerance_px(c.o, q, path.At(0.0));  // (the path starts at the seed)
   const DashInPixelsOptions options;
   // (every detection whose light may reach the window: the longest a dash-long sweep)
   const double reach_px = dash_length_px + (options.window_fwhm + 3.0) * place.fwhm_px;

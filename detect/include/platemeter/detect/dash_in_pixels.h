@@ -25,12 +25,14 @@ struct DashPlace {
   double length_px = 0.0;      // the sweep's length (exposure x speed)
   double fwhm_px = 0.0;        // the PSF's
   double flux_dn = 0.0;        // the star's dash flux (its flux per second x the dash's duration)
+  double tolerance_px = 0.0;   // how far the true sweep may lie from this one (the flow's prediction error)
 };
 
 struct DashInPixelsOptions {
   double window_fwhm = 2.5;          // the fit's window: the sweep plus this many FWHM about it
   double on_sweep_fwhm = 1.0;        // a detection centred within this many FWHM of the sweep is not modelled:
-                                     // its light is what is asked about (a dash merged with a neighbour)
+                                     // its light is what is asked about (a dash merged with a neighbour), if
+                                     // it may be such a merge (MayHoldDash in dash_in_pixels.cpp)
   double min_third = 0.5;            // each third's flux at least this x a third of the dash's flux,
   double max_third = 3.0;            // and at most this x (a merged neighbour adds light; a bright star's
                                      // image is no dash)

@@ -707,7 +707,10 @@ int main(int argc, char** argv) {
       for (size_t from = 0; from < places.size();) {
         const size_t to = std::min(places.find(';', from), places.size());
         PixelPoint q;
-        if (std::sscanf(places.substr(from, to - from).c_str(), "%lf,%lf", &q.x_px, &q.y_px) != 2) Usage();
+        if (std::sscanf(places.substr(from, to - from).c_str(), "%lf,%lf", &q.x_px, &q.y_px) != 2) {
+          std::fprintf(stderr, "bench_trails: --truth-near takes X,Y[;X,Y...] in scan pixels, not %s\n", places.c_str());
+          return 2;
+        }
         run.truth_near.push_back(q);
         from = to + 1;
       }

@@ -302,7 +302,7 @@ TEST(TrailCrowded, NoImageOfACrowdedFieldIsTaggedWrongly) {
                                     [](TrailOptions* o) { o->ablation.flow_crowded_readings = false; });
   EXPECT_EQ(no_crowded.wrong, 0);
   EXPECT_LT(no_crowded.right, score.right);
-  // The empty dash places' veto (docs/trails.md, "Empty dash places") refuses almost no right reading of a
+  // The empty dash places' veto (docs/trails.md, "Empty places") refuses almost no right reading of a
   // crowded field: without it, at most 1 % of the clean dots more right (and none wrong with it, above).
   const Score no_veto = rescored("without the empty dash places' veto",
                                  [](TrailOptions* o) { o->ablation.flow_empty_places = false; });

@@ -1,7 +1,8 @@
-// A reading's dash places (detect/src/trails/reading_places.cpp, internal; docs/trails.md "Empty dash
-// places"), on one star built by hand along a uniform flow: its right reading finds every dash place held,
-// a reading one exposure off finds many empty and is refused; a dash hidden beside a bright star says
-// nothing, one measured beside it as a blended point at a fraction of its flux holds its place.
+// A reading's places (detect/src/trails/reading_places.cpp, internal; docs/trails.md "Empty places"), on one
+// star built by hand along a uniform flow: its right reading finds every dash and dot place held, a reading
+// one exposure off finds many empty and is refused, and so is one a dot group off by its dot places alone; a
+// dash hidden beside a bright star says nothing, one measured beside it as a blended point at a fraction of
+// its flux holds its place.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -56,13 +57,15 @@ struct HandStar {
   }
 };
 
-// The places of the star's readings: the seed (its first dash) read at seed_s.
-DashPlaces Places(const HandStar& star, double seed_s) {
+// The places of the star's readings: the seed (its first dash) read at seed_s; dots of min_dot_flux_dn or more
+// counted (by default every dot: the faintest, 0.6 s, holds 600 DN).
+DashPlaces Places(const HandStar& star, double seed_s, double min_dot_flux_dn = 0.0) {
   const test::HandContext hand(star.images, star.schedule, kFwhm_px, kVelocity_px_per_s);
   EXPECT_TRUE(hand.flow_ok);
   const double span_s = star.schedule.back().mid_s - star.schedule.front().mid_s;
   const FlowPath path(hand.flow, star.origin, span_s);
-  return ReadingPlaces(hand.c, hand.all, path, star.origin, seed_s, kFluxPerS, [&](int i) { return star.trail_of[i]; });
+  return ReadingPlaces(hand.c, hand.all, path, star.origin, seed_s, kFluxPerS, min_dot_flux_dn,
+                       [&](int i) { return star.trail_of[i]; });
 }
 
 TEST(ReadingPlaces, ARightReadingFindsItsDashPlacesHeld) {
@@ -70,7 +73,36 @@ TEST(ReadingPlaces, ARightReadingFindsItsDashPlacesHeld) {
   const DashPlaces right = Places(star, star.t0_s);
   EXPECT_EQ(right.inside, 2 + 3 + 4 + 5 + 4 * 4);  // leading dashes and four separators per trail
   EXPECT_EQ(right.empty, 0);
+  // Each trail's first dot (0.6 s) lies 10 s of motion (4 px) past the end of its last leading dash, 33 times
+  // brighter: beside it, it says nothing.
+  EXPECT_EQ(right.dot_inside, 4 * 25 - 4);
+  EXPECT_EQ(right.dot_empty, 0);
   EXPECT_LT(EmptyPlacesLogOdds(right), 0.0);
+  // Dots fainter than the bound are not counted (the detector may have missed them): the 0.6 s ones.
+  EXPECT_EQ(Places(star, star.t0_s, 0.9 * kFluxPerS).dot_inside, 4 * 20);
+}
+
+// Paris's twin path (docs/trails_record.md, 2026-12-07): a reading whose dash places another star on the
+// star's diurnal path holds (its dashes, where the reading puts the star's) is refused by its dot places.
+TEST(ReadingPlaces, AReadingWhoseDashPlacesAnotherStarHoldsIsRefusedByItsDots) {
+  HandStar star;
+  const double shift_s = -240.0;  // the seed read 240 s late: every image predicted 240 s after the star's
+  const DashPlaces alone = Places(star, star.t0_s + shift_s);
+  for (const ShutterExposure& e : star.schedule)  // the twin's dashes at the reading's dash places
+    if (e.kind == ExposureKind::kDash) {
+      star.Add(star.At(e.mid_s - shift_s), kFluxPerS * e.duration_s, e, 0);
+      star.trail_of.back() = 0;  // (not decoded)
+    }
+  const DashPlaces twin = Places(star, star.t0_s + shift_s);
+  std::printf("[reading places] seed read 240 s late: dashes %d of %d empty (%d without the twin), dots %d of %d\n",
+              twin.empty, twin.inside, alone.empty, twin.dot_empty, twin.dot_inside);
+  EXPECT_GE(alone.empty, 6);
+  EXPECT_EQ(twin.empty, 0);
+  EXPECT_GE(twin.dot_empty, 20);
+  EXPECT_GT(EmptyPlacesLogOdds(twin), std::log(kRefuteOdds));
+  // The star's right reading keeps every place held with the twin's dashes beside it.
+  const DashPlaces right = Places(star, star.t0_s);
+  EXPECT_EQ(right.empty + right.dot_empty, 0);
 }
 
 TEST(ReadingPlaces, AReadingAnExposureOffFindsManyEmptyAndIsRefused) {
@@ -78,8 +110,8 @@ TEST(ReadingPlaces, AReadingAnExposureOffFindsManyEmptyAndIsRefused) {
   // The seed read as the next dash (30 s later) and as the dash before a whole trail's shift (one group).
   for (const double shift_s : {30.0, -30.0, 120.0}) {
     const DashPlaces wrong = Places(star, star.t0_s + shift_s);
-    std::printf("[reading places] seed read %+.0f s off: %d of %d places empty, log odds %.1f\n", shift_s, wrong.empty,
-                wrong.inside, EmptyPlacesLogOdds(wrong));
+    std::printf("[reading places] seed read %+.0f s off: %d of %d dash places empty, %d of %d dot places, log odds %.1f\n",
+                shift_s, wrong.empty, wrong.inside, wrong.dot_empty, wrong.dot_inside, EmptyPlacesLogOdds(wrong));
     EXPECT_GE(wrong.empty, 6) << "shift " << shift_s << " s: " << wrong.empty << " of " << wrong.inside;
     EXPECT_GT(EmptyPlacesLogOdds(wrong), std::log(kRefuteOdds)) << "shift " << shift_s << " s";
   }
@@ -112,6 +144,29 @@ TEST(ReadingPlaces, ADashHiddenBesideABrightStarSaysNothingAndAHalvedOneHoldsIts
   EXPECT_EQ(Places(star, star.t0_s).empty, 0);
   star.images[halved].flags = 0;  // the same image, not blended: by flux less than half a dash
   EXPECT_EQ(Places(star, star.t0_s).empty, 1);
+}
+
+// A lone trail's number against the others' (decoder_flow.cpp, LoneNumberRefuted), with the places of two
+// Paris readings (docs/trails_record.md, 2026-12-07). KS18071's T1, counted T2 over another star's dash before
+// its run: 3 of 18 dash places and 1 of 4 dot places empty (log odds +3.3, short of refusal), against 0 of 13
+// and 0 of 2 as T1. KS6851's right T2 reading: 0 of 12 and 0 of 7 empty, against 0 of 26 and 1 of 31 as T4
+// (more places held, log odds -16.0 against -6.2: held places, which every reading predicts, do not decide).
+TEST(ReadingPlaces, ALoneReadingLeaningWrongGivesWayToANumberLeavingTwoFewerPlacesEmpty) {
+  const auto places = [](int empty, int inside, int dot_empty, int dot_inside) {
+    DashPlaces p;
+    p.empty = empty, p.inside = inside, p.dot_empty = dot_empty, p.dot_inside = dot_inside;
+    return p;
+  };
+  const DashPlaces counted_t2 = places(3, 18, 1, 4), as_t1 = places(0, 13, 0, 2);
+  EXPECT_GT(EmptyPlacesLogOdds(counted_t2), 0.0);
+  EXPECT_LT(EmptyPlacesLogOdds(counted_t2), std::log(kRefuteOdds));  // not refused on its own
+  EXPECT_TRUE(OtherReadingLikelier(counted_t2, as_t1));
+  EXPECT_FALSE(OtherReadingLikelier(as_t1, counted_t2));
+  const DashPlaces right_t2 = places(0, 12, 0, 7), as_t4 = places(0, 26, 1, 31);
+  EXPECT_FALSE(OtherReadingLikelier(right_t2, as_t4));
+  // One empty place fewer is not enough (10 times likelier, not 100), nor is a reading not leaning wrong.
+  EXPECT_FALSE(OtherReadingLikelier(places(2, 18, 0, 4), places(1, 13, 0, 2)));
+  EXPECT_FALSE(OtherReadingLikelier(places(2, 30, 0, 40), places(0, 13, 0, 2)));
 }
 
 }  // namespace

@@ -83,7 +83,9 @@ class TrailDecoder {
   void ForMissingTrails(const std::function<void(int root, int s, int k, double t_end_s, const PixelPoint& origin)>& fn);
   void CompleteStars();
   std::vector<int> FlowSeeds() const;
+  DashPlaces PlacesOfReading(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s) const;
   bool ReadingRefuted(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s);
+  bool LoneNumberRefuted(int dash, const LoneTrail& lone, double seed_s, const std::vector<Taken>& taken);
   int FlowPlaceImage(const FlowPath& path, double dt_s, const PixelPoint& origin, const ShutterExposure& e,
                      double flux_per_s) const;
   void FillTrailsAlongFlow();

@@ -42,7 +42,7 @@ void TrailDecoder::FlowTrails() {
       double seed_s = std::nan("");  // (the seed is one of the run's dashes it took)
       for (const auto& [j, i] : lone.taken)
         if (i == dash) seed_s = c_.per_trail[lone.trail][j].mid_s;
-      if (std::isfinite(seed_s) && ReadingRefuted(dash, seed_s, per_trail, lone.flux_per_s)) continue;
+      if (std::isfinite(seed_s) && LoneNumberRefuted(dash, lone, seed_s, per_trail)) continue;
       const PixelPoint v = flow_.Velocity(c_.p[dash]);
       AddChain(TrailStep::kLone, lone.trail, lone.taken, lone.flux_per_s, std::hypot(v.x_px, v.y_px), 0,
                o_.tuning.flow_min_images);
@@ -111,7 +111,7 @@ void TrailDecoder::CheckJoinsOnFlow() {
 
 // Stars of separator trails only (step 6 numbered them by a sibling's raw images, which a wrong number can
 // find too) are read as the flow's readings are: from their brightest dash, refused with all their trails
-// when their empty dash places refute the reading (ReadingRefuted). A star holding a trail decoded by its
+// when their empty places refute the reading (ReadingRefuted). A star holding a trail decoded by its
 // run has its number from that run.
 void TrailDecoder::CheckSeparatorStars() {
   std::map<int, std::vector<int>> trails_of;  // star root -> its decoded trails
@@ -190,15 +190,41 @@ void TrailDecoder::ForMissingTrails(
     }
 }
 
-// Whether a reading of the seed (the seed at seed_s; its images `taken` per trail) is refused for the dash
-// places it predicts empty (docs/trails.md "Empty dash places"): they are counted at the reading's faintest
-// dash's flux and must not make the reading kRefuteOdds times likelier wrong than right.
-bool TrailDecoder::ReadingRefuted(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s) {
+// A reading's places (the seed at seed_s; its images `taken` per trail; docs/trails.md "Empty places"): counted
+// at the reading's faintest dash's flux, its dots where the detector cannot have missed them.
+DashPlaces TrailDecoder::PlacesOfReading(int dash, double seed_s, const std::vector<Taken>& taken,
+                                         double flux_per_s) const {
   const auto trail_of = [&](int i) { return result_.images[i].assigned ? result_.images[i].trail : 0; };
+  return ReadingPlaces(c_, *all_, PlatePath(c_, flow_, c_.p[dash]), c_.p[dash], seed_s,
+                       FaintestDashRate(c_, taken, flux_per_s), kDetectedDotSnr * images_[dash].sigma_flux_dn, trail_of);
+}
+
+// Whether a reading is refused for the places it predicts empty: they must not make it kRefuteOdds times
+// likelier wrong than right.
+bool TrailDecoder::ReadingRefuted(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s) {
   if (!o_.ablation.flow_empty_places) return false;
-  const DashPlaces places = ReadingPlaces(c_, *all_, PlatePath(c_, flow_, c_.p[dash]), c_.p[dash], seed_s,
-                                          FaintestDashRate(c_, taken, flux_per_s), trail_of);
-  const bool refuted = EmptyPlacesLogOdds(places) > std::log(kRefuteOdds);
+  const bool refuted = EmptyPlacesLogOdds(PlacesOfReading(dash, seed_s, taken, flux_per_s)) > std::log(kRefuteOdds);
+  result_.refused_readings += refuted;
+  return refuted;
+}
+
+// Whether a lone trail's reading (its number from its run counted back, the seed at seed_s) is refused for its
+// places: refuted as any reading, or another number's reading of the same images likelier by its places
+// (OtherReadingLikelier). The run's count then rests on one place that may hold another star's light (Paris's
+// KS18071, docs/trails_record.md), and the trail is left untagged.
+bool TrailDecoder::LoneNumberRefuted(int dash, const LoneTrail& lone, double seed_s, const std::vector<Taken>& taken) {
+  if (!o_.ablation.flow_empty_places) return false;
+  const DashPlaces own = PlacesOfReading(dash, seed_s, taken, lone.flux_per_s);
+  const double own_log_odds = EmptyPlacesLogOdds(own);
+  bool refuted = own_log_odds > std::log(kRefuteOdds);
+  int j_seed = -1;  // the seed's exposure in the trail, and where the runs' lengths put it under trail u
+  for (const auto& [j, i] : lone.taken)
+    if (i == dash) j_seed = j;
+  for (int u = 0; u < trails_ && !refuted && own_log_odds > 0.0 && j_seed >= 0; ++u) {  // (else none is likelier)
+    const int ju = j_seed + program_.leading_dashes[u] - program_.leading_dashes[lone.trail];
+    if (u == lone.trail || ju < 0 || ju >= static_cast<int>(c_.per_trail[u].size())) continue;
+    refuted = OtherReadingLikelier(own, PlacesOfReading(dash, c_.per_trail[u][ju].mid_s, taken, lone.flux_per_s));
+  }
   result_.refused_readings += refuted;
   return refuted;
 }

@@ -44,6 +44,11 @@ inline constexpr double kMergedSeedShare = 0.5;
 // their sigmas (Denver: RMS(error / sigma) about 16 over 2049 such dots); 10, 15 and 25 % tagged the same
 // measurable dots right (+-2 on each tuning plate), and left Miami 0, 1 and 2 wrong tags.
 inline constexpr double kMergedFluxExcess = 0.10;
+// A star's trails' fluxes per second (each the median over its images) agree to this share, beyond their
+// sigmas: on the benchmark plate, of 6554 pairs of one star's trails, 90 % within 3.6 %, 99 % within 11 %
+// (2026-12-07). Another star on the same diurnal path differs by its magnitude (Cairo's KS4270 and KS5615:
+// 0.25 mag, 26 %).
+inline constexpr double kStarFluxSpread = 0.10;
 // Whether an image of flux_dn (sigma_flux_dn) holds more than expect_dn by that share and 4 sigmas.
 inline bool HoldsMergedLight(double flux_dn, double sigma_flux_dn, double expect_dn) {
   return expect_dn > 0 && flux_dn - expect_dn > kMergedFluxExcess * expect_dn + 4.0 * sigma_flux_dn;
@@ -81,12 +86,16 @@ inline constexpr int kShownImages = 3;
 // or a shutter fault during one trail empties its places on every star).
 inline constexpr double kExposedRadius_px = 150.0;
 
-// --- A reading's empty dash places (reading_places.cpp; DecodeByFlow's and DecodeLoneTrail's readings)
-// The share of a reading's dash places the plate shows empty, by flux (CountDashPlaces), when the reading is
-// right and when it is wrong. Measured on the four tuning plates: right readings 0.3-1.1 % (a crowd hides a
-// dash), wrong ones 17-43 % (a wrong reading puts its dashes where the star was exposed for a dot or not at
-// all). Both rates are set towards each other, so that only clear cases decide.
+// --- A reading's empty places (reading_places.cpp; DecodeByFlow's and DecodeLoneTrail's readings)
+// The share of a reading's places the plate shows empty, by flux (ReadingPlaces), when the reading is right
+// and when it is wrong. Measured on the tuning plates: right readings 0.3-1.1 % of their dash places (a crowd
+// hides a dash) and 1.6-2.0 % of their dot places (the benchmark plate and Paris, 2026-12-07: dots the
+// detector missed in a crowd), wrong ones 17-43 % (a wrong reading puts its dashes where the star was
+// exposed for a dot or not at all). Both rates are set towards each other, so that only clear cases decide.
 inline constexpr double kEmptyWhenRight = 0.03, kEmptyWhenWrong = 0.30;
+// A reading's dot places count where the dot would be detected at this SNR or more, its flux sigma taken as
+// the seed dash's (a dot, shorter, has a smaller one): fainter dots may be missed by the detector.
+inline constexpr double kDetectedDotSnr = 10.0;
 // A reading is refused when its empty places make it this many times likelier wrong than right (with the
 // rates above: 6 of 30 places empty; 5 of 20).
 inline constexpr double kRefuteOdds = 100.0;

@@ -1,7 +1,7 @@
-// A reading's predicted dash places, counted (trail_internal.h; docs/trails.md "Empty dash places"): where a
-// reading of a star puts its dashes, and how many of those places the plate shows empty. A right reading's
-// places hold its dashes except where a crowd hides one; a wrong reading's lie where the star was not
-// exposed for a dash, and many are empty.
+// A reading's predicted places, counted (trail_internal.h; docs/trails.md "Empty places"): where a reading of
+// a star puts its dashes and its bright dots, and how many of those places the plate shows empty. A right
+// reading's places hold its images except where a crowd hides one; a wrong reading's lie where the star was
+// not exposed so (a dot for a dash, a dash or the break for a dot), and many are empty.
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -32,44 +32,52 @@ bool Dominated(const Context& c, const Grid& all, const PixelPoint& q, double da
   return dominated;
 }
 
+// Exposure e of trail s predicted along `path` (the seed at p at seed_s), counted in *places as DashPlaces
+// (trail_internal.h) says: whether it lies inside, and whether it is empty.
+void CountPlace(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s, int s,
+                const ShutterExposure& e, double flux_per_s, const std::function<int(int)>& trail_of,
+                DashPlaces* places) {
+  const TrailOptions& o = c.o;
+  const double dt = e.mid_s - seed_s;
+  if (!path.Covers(dt)) return;
+  const PixelPoint q = path.At(dt), v = path.VelocityAt(dt);
+  if (!Inside(o, q, o.edge_margin_px)) return;
+  const double image_flux_dn = flux_per_s * e.duration_s;
+  if (Dominated(c, all, q, image_flux_dn, std::hypot(v.x_px, v.y_px) * e.duration_s)) return;
+  const bool dash = e.kind == ExposureKind::kDash;
+  ++(dash ? places->inside : places->dot_inside);
+  // Only where trail s was exposed: another star's image of it tagged nearby (a cloud or a shutter fault
+  // during one trail empties its places on every star).
+  bool exposed = false;
+  all.Near(q.x_px, q.y_px, kExposedRadius_px, [&](int i) { exposed = exposed || trail_of(i) == s + 1; });
+  const double tol_px = FlowTolerance_px(o, q, p);
+  // (An image tagged as another trail number of another star, whose flux leaves no room for this image,
+  // holds none of it; one tagged with trail s may be the star's own.)
+  const auto explained = [&](int i) {
+    return trail_of(i) > 0 && trail_of(i) != s + 1 && CannotHideDash(c, i, image_flux_dn);
+  };
+  const bool empty = exposed && DashPlaceEmpty(c, all, q, v, image_flux_dn, e.duration_s, tol_px, true, explained);
+  (dash ? places->empty : places->dot_empty) += empty;
+}
+
 }  // namespace
 
 DashPlaces CountDashPlaces(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s,
                            int s, double flux_per_s, const std::function<int(int)>& trail_of) {
-  const TrailOptions& o = c.o;
   DashPlaces places;
-  for (const ShutterExposure& e : c.per_trail[s]) {
-    if (e.kind != ExposureKind::kDash) continue;
-    const double dt = e.mid_s - seed_s;
-    if (!path.Covers(dt)) continue;
-    const PixelPoint q = path.At(dt), v = path.VelocityAt(dt);
-    if (!Inside(o, q, o.edge_margin_px)) continue;
-    const double dash_flux_dn = flux_per_s * e.duration_s;
-    if (Dominated(c, all, q, dash_flux_dn, std::hypot(v.x_px, v.y_px) * e.duration_s)) continue;
-    ++places.inside;
-    // Only where trail s was exposed: another star's image of it tagged nearby (a cloud or a shutter fault
-    // during one trail empties its places on every star).
-    bool exposed = false;
-    all.Near(q.x_px, q.y_px, kExposedRadius_px, [&](int i) { exposed = exposed || trail_of(i) == s + 1; });
-    const double tol_px = FlowTolerance_px(o, q, p);
-    // (An image tagged as another trail number of another star, whose flux leaves no room for this dash,
-    // holds none of it; one tagged with trail s may be the star's own.)
-    const auto explained = [&](int i) {
-      return trail_of(i) > 0 && trail_of(i) != s + 1 && CannotHideDash(c, i, dash_flux_dn);
-    };
-    places.empty += exposed && DashPlaceEmpty(c, all, q, v, dash_flux_dn, e.duration_s, tol_px, true, explained);
-  }
+  for (const ShutterExposure& e : c.per_trail[s])
+    if (e.kind == ExposureKind::kDash) CountPlace(c, all, path, p, seed_s, s, e, flux_per_s, trail_of, &places);
   return places;
 }
 
 DashPlaces ReadingPlaces(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s,
-                         double flux_per_s, const std::function<int(int)>& trail_of) {
-  DashPlaces sum;
-  for (int s = 0; s < static_cast<int>(c.per_trail.size()); ++s) {
-    const DashPlaces places = CountDashPlaces(c, all, path, p, seed_s, s, flux_per_s, trail_of);
-    sum.inside += places.inside, sum.empty += places.empty;
-  }
-  return sum;
+                         double flux_per_s, double min_dot_flux_dn, const std::function<int(int)>& trail_of) {
+  DashPlaces places;
+  for (int s = 0; s < static_cast<int>(c.per_trail.size()); ++s)
+    for (const ShutterExposure& e : c.per_trail[s])
+      if (e.kind == ExposureKind::kDash || flux_per_s * e.duration_s >= min_dot_flux_dn)
+        CountPlace(c, all, path, p, seed_s, s, e, flux_per_s, trail_of, &places);
+  return places;
 }
 
 double FaintestDashRate(const Context& c, const std::vector<std::vector<std::pair<int, int>>>& taken,
@@ -82,9 +90,16 @@ double FaintestDashRate(const Context& c, const std::vector<std::vector<std::pai
   return rate;
 }
 
+bool OtherReadingLikelier(const DashPlaces& own, const DashPlaces& other) {
+  const int fewer_empty = own.empty + own.dot_empty - other.empty - other.dot_empty;
+  return EmptyPlacesLogOdds(own) > 0.0 &&
+         fewer_empty * std::log(kEmptyWhenWrong / kEmptyWhenRight) >= std::log(kRefuteOdds) - 1e-9;
+}
+
 double EmptyPlacesLogOdds(const DashPlaces& places) {
-  const int held = places.inside - places.empty;
-  return places.empty * std::log(kEmptyWhenWrong / kEmptyWhenRight) +
+  const int empty = places.empty + places.dot_empty;
+  const int held = places.inside + places.dot_inside - empty;
+  return empty * std::log(kEmptyWhenWrong / kEmptyWhenRight) +
          held * std::log((1.0 - kEmptyWhenWrong) / (1.0 - kEmptyWhenRight));
 }
 

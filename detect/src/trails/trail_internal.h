@@ -300,6 +300,16 @@ bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int referenc
 // the other's end lands on it within join_tolerance_px + join_tolerance_fraction x the distance.
 bool OnOneArc(const TrailOptions& o, const Track& a, double a1_s, const Track& b, double b0_s);
 
+// The median flux per second of a trail's images (exposure j of trail t: per_trail[t][j]) that may show it
+// (evidence, with a flux, neither clipped nor a crowd's piece), and its sigma (the spread's, MAD, over the
+// root of their count, as a median's); {0, 0} with fewer than kMinFluxImages (trail_pattern.cpp).
+std::pair<double, double> FluxPerSecond(const Context& c, const std::vector<std::pair<int, int>>& images, int t);
+// Whether two trails' images (a of trail ta, b of trail tb) cannot be one star's: their fluxes per second
+// differ by more than kStarFluxSpread and 4 sigmas (a star's trails agree; another star on its diurnal path
+// has another magnitude). False where either has too few images to tell.
+bool OtherStarsFlux(const Context& c, const std::vector<std::pair<int, int>>& a, int ta,
+                    const std::vector<std::pair<int, int>>& b, int tb);
+
 // The sibling a separator-grown trail grew under its number (NumberBySiblings).
 struct SiblingGrowth {
   int sibling = -1;                        // 0-based trail number of the sibling
@@ -308,7 +318,8 @@ struct SiblingGrowth {
 };
 // The number (0-based) under which exactly one sibling grows from the trail's track: at least
 // min_exposures_after_run images, their own track fitted to the measuring precision (median residual
-// within max_median_residual_px) and on one arc with the trail's. -1 if none or several, or for a slow
+// within max_median_residual_px), on one arc with the trail's and of its flux per second (not
+// OtherStarsFlux). -1 if none or several, or for a slow
 // star (10 s of motion, the offset of a wrong number, within twice the sibling tolerance across a break).
 // other_number(image, sibling): the image belongs to a decoded trail of another number than the sibling's.
 int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, int reference,
@@ -355,13 +366,16 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
 // tagged as another number whose flux tolerance could not have let the dash through holds nothing).
 // trail_of(i): the trail number (1..) image i is tagged with, 0 if none.
 struct DashPlaces {
-  int inside = 0, empty = 0;
+  int inside = 0, empty = 0;          // dash places
+  int dot_inside = 0, dot_empty = 0;  // dot places (ReadingPlaces)
 };
 DashPlaces CountDashPlaces(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s,
                            int s, double flux_per_s, const std::function<int(int)>& trail_of);
-// CountDashPlaces summed over every trail: a whole reading's places (the seed at p at seed_s).
+// A whole reading's places (the seed at p at seed_s): every trail's dash places as CountDashPlaces counts
+// them, and so its dot places where the dot's flux (flux_per_s x its duration) is at least min_dot_flux_dn,
+// bright enough that the detector cannot have missed it.
 DashPlaces ReadingPlaces(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s,
-                         double flux_per_s, const std::function<int(int)>& trail_of);
+                         double flux_per_s, double min_dot_flux_dn, const std::function<int(int)>& trail_of);
 // The flux per second of a reading's faintest dash (taken: per trail, (exposure, image); evidence only), at
 // most flux_per_s: a blend only adds flux, so the faintest dash is the star's own.
 double FaintestDashRate(const Context& c, const std::vector<std::vector<std::pair<int, int>>>& taken,
@@ -369,6 +383,11 @@ double FaintestDashRate(const Context& c, const std::vector<std::vector<std::pai
 // The log of how much likelier a reading's empty places are if the reading is wrong than if it is right: each
 // place empty with probability kEmptyWhenWrong or kEmptyWhenRight (evidence.h), independently.
 double EmptyPlacesLogOdds(const DashPlaces& places);
+// Whether another reading of the same images (other) is kRefuteOdds times likelier than a reading leaning wrong
+// (own: log odds above 0). Reading b is exp(LO_a - LO_b) times likelier than a (each place independent, one of
+// them right); counted on the empty places alone (the held ones each reading predicts, whatever its number),
+// two fewer empty places make it so (kEmptyWhenWrong / kEmptyWhenRight = 10 each).
+bool OtherReadingLikelier(const DashPlaces& own, const DashPlaces& other);
 
 // A lone trail (trail_lone.cpp): a star whose other trails are off the format or hidden, numbered by its
 // leading run found along the flow.

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "../median.h"
+#include "evidence.h"
 #include "trail_internal.h"
 
 namespace platemeter::trail_internal {
@@ -80,6 +82,28 @@ bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int referenc
   std::sort(best.taken.begin(), best.taken.end());
   *out = best;
   return true;
+}
+
+std::pair<double, double> FluxPerSecond(const Context& c, const std::vector<std::pair<int, int>>& images, int t) {
+  std::vector<double> rates;
+  for (const auto& [j, i] : images) {
+    const DetectedStar& d = c.images[i];
+    if (IsEvidence(c, i) && d.flux_dn > 0 && !(d.flags & (kStarSaturated | kStarCrowded)))
+      rates.push_back(d.flux_dn / c.per_trail[t][j].duration_s);
+  }
+  if (static_cast<int>(rates.size()) < kMinFluxImages) return {0.0, 0.0};
+  const double median = detect_internal::Median(rates);
+  std::vector<double> deviations;
+  for (double r : rates) deviations.push_back(std::abs(r - median));
+  const double sigma = 1.4826 * detect_internal::Median(deviations) * 1.2533 / std::sqrt(static_cast<double>(rates.size()));
+  return {median, sigma};
+}
+
+bool OtherStarsFlux(const Context& c, const std::vector<std::pair<int, int>>& a, int ta,
+                    const std::vector<std::pair<int, int>>& b, int tb) {
+  const auto [ra, sa] = FluxPerSecond(c, a, ta);
+  const auto [rb, sb] = FluxPerSecond(c, b, tb);
+  return ra > 0 && rb > 0 && std::abs(ra - rb) > kStarFluxSpread * std::min(ra, rb) + 4.0 * std::hypot(sa, sb);
 }
 
 namespace {
@@ -169,6 +193,7 @@ int NumberBySiblings(const Context& c, const Grid& all, const PatternTrail& pt, 
         continue;
       if (!(s < u ? OnOneArc(o, sibling_track, st.back(), track, ts.front()) : OnOneArc(o, track, ts.back(), sibling_track, st.front())))
         continue;
+      if (OtherStarsFlux(c, pt.taken, reference, sibling, s)) continue;  // another star on the path
       grows = true;
       if (count == 0) *grown = {s, sibling, rate};
     }

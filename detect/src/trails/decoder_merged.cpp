@@ -4,26 +4,10 @@
 #include <algorithm>
 #include <map>
 
-#include "../median.h"
 #include "decoder.h"
 #include "evidence.h"
 
 namespace platemeter::trail_internal {
-
-namespace {
-
-// The star's flux per second: the median over its tagged images of flux / exposure length (images that may
-// have lost light -- clipped, pieces of a crowded clump -- left out); 0 with fewer than kMinFluxImages.
-double StarFluxPerSecond(const Context& c, const std::vector<std::pair<int, double>>& image_durations) {
-  std::vector<double> rates;
-  for (const auto& [i, duration_s] : image_durations) {
-    const DetectedStar& d = c.images[i];
-    if (d.flux_dn > 0 && !(d.flags & (kStarSaturated | kStarCrowded))) rates.push_back(d.flux_dn / duration_s);
-  }
-  return static_cast<int>(rates.size()) < kMinFluxImages ? 0.0 : detect_internal::Median(rates);
-}
-
-}  // namespace
 
 void TrailDecoder::DropMergedImages() {
   std::map<int, std::vector<int>> trails_of;  // star root -> its decoded trails
@@ -34,7 +18,8 @@ void TrailDecoder::DropMergedImages() {
     for (int k : ks)
       for (const auto& [j, i] : chain_[k].kept)
         image_durations.push_back({i, c_.per_trail[result_.chains[k].trail - 1][j].duration_s});
-    const double flux_per_s = StarFluxPerSecond(c_, image_durations);
+    // (the median over its tagged images: those that may have lost light, clipped or cut from a crowd, left out)
+    const double flux_per_s = MedianFluxPerSecond(c_, image_durations).first;
     if (flux_per_s <= 0) continue;
     for (int k : ks) {
       const std::vector<ShutterExposure>& ex = c_.per_trail[result_.chains[k].trail - 1];

@@ -300,9 +300,11 @@ bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int referenc
 // the other's end lands on it within join_tolerance_px + join_tolerance_fraction x the distance.
 bool OnOneArc(const TrailOptions& o, const Track& a, double a1_s, const Track& b, double b0_s);
 
-// The median flux per second of a trail's images (exposure j of trail t: per_trail[t][j]) that may show it
+// The median flux per second (DN/s) of images (image, its exposure's duration in s) that may show it
 // (evidence, with a flux, neither clipped nor a crowd's piece), and its sigma (the spread's, MAD, over the
 // root of their count, as a median's); {0, 0} with fewer than kMinFluxImages (trail_pattern.cpp).
+std::pair<double, double> MedianFluxPerSecond(const Context& c, const std::vector<std::pair<int, double>>& image_durations);
+// The same of a trail's images (exposure j of trail t: per_trail[t][j]).
 std::pair<double, double> FluxPerSecond(const Context& c, const std::vector<std::pair<int, int>>& images, int t);
 // Whether two trails' images (a of trail ta, b of trail tb) cannot be one star's: their fluxes per second
 // differ by more than kStarFluxSpread and 4 sigmas (a star's trails agree; another star on its diurnal path

@@ -84,12 +84,12 @@ bool GrowFromSeparator(const Context& c, const Grid& all, int dash, int referenc
   return true;
 }
 
-std::pair<double, double> FluxPerSecond(const Context& c, const std::vector<std::pair<int, int>>& images, int t) {
+std::pair<double, double> MedianFluxPerSecond(const Context& c, const std::vector<std::pair<int, double>>& image_durations) {
   std::vector<double> rates;
-  for (const auto& [j, i] : images) {
+  for (const auto& [i, duration_s] : image_durations) {
     const DetectedStar& d = c.images[i];
     if (IsEvidence(c, i) && d.flux_dn > 0 && !(d.flags & (kStarSaturated | kStarCrowded)))
-      rates.push_back(d.flux_dn / c.per_trail[t][j].duration_s);
+      rates.push_back(d.flux_dn / duration_s);
   }
   if (static_cast<int>(rates.size()) < kMinFluxImages) return {0.0, 0.0};
   const double median = detect_internal::Median(rates);
@@ -97,6 +97,12 @@ std::pair<double, double> FluxPerSecond(const Context& c, const std::vector<std:
   for (double r : rates) deviations.push_back(std::abs(r - median));
   const double sigma = 1.4826 * detect_internal::Median(deviations) * 1.2533 / std::sqrt(static_cast<double>(rates.size()));
   return {median, sigma};
+}
+
+std::pair<double, double> FluxPerSecond(const Context& c, const std::vector<std::pair<int, int>>& images, int t) {
+  std::vector<std::pair<int, double>> image_durations;
+  for (const auto& [j, i] : images) image_durations.push_back({i, c.per_trail[t][j].duration_s});
+  return MedianFluxPerSecond(c, image_durations);
 }
 
 bool OtherStarsFlux(const Context& c, const std::vector<std::pair<int, int>>& a, int ta,

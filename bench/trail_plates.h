@@ -60,11 +60,17 @@ inline const std::vector<TrailPlate>& TrailPlateFamily() {
        {3, 2, 5, 4}},
       {"quebec-1973-05-late", "report", 46.8, -71.2, "1973-05-25T08:00:00Z", 210, 78, 160, 12.5, 32, 7, 35, 100, 7.0,
        570, {2, 3, 4}},
-      // Held out from stop 47, when Paris and Cairo (held out until then) became tuning plates.
-      {"lisbon-1973-09-late", "report", 38.7, -9.1, "1973-09-18T04:15:00Z", 250, 84, 75, 16, 32, 7, 30, 70, 7.5, 500,
+      // Held out at stop 47, when Paris and Cairo (held out until then) became tuning plates; tuning plates
+      // since stop 49, when their wrong tags were looked into.
+      {"lisbon-1973-09-late", "tune", 38.7, -9.1, "1973-09-18T04:15:00Z", 250, 84, 75, 16, 32, 7, 30, 70, 7.5, 500,
        {3, 5, 2, 4}},
-      {"houston-1974-03-early", "report", 29.8, -95.4, "1974-03-16T03:00:00Z", 15, 87, 250, 20, 34, 8, 25, 60, 8.0,
+      {"houston-1974-03-early", "tune", 29.8, -95.4, "1974-03-16T03:00:00Z", 15, 87, 250, 20, 34, 8, 25, 60, 8.0,
        420, {4, 3, 2, 5}},
+      // Held out from stop 49, when Lisbon and Houston became tuning plates.
+      {"munich-1972-10-early", "report", 48.1, 11.6, "1972-10-05T19:45:00Z", 300, 83, 20, 14, 30, 7, 30, 70, 7.0,
+       480, {5, 2, 4, 3}},
+      {"delhi-1973-04-late", "report", 28.6, 77.2, "1973-04-14T22:20:00Z", 120, 86, 170, 18, 34, 8, 25, 55, 7.5,
+       540, {2, 5, 3, 4}},
   };
   return family;
 }

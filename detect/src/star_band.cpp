@@ -121,14 +121,6 @@ void SplitClumps(const StarDetectorOptions& o, BandImages* im) {
   components.insert(components.end(), whole.begin(), whole.end());
 }
 
-// Distance from (x, y) to the nearer arm line of the cross centred at m (options.mask_arm_axes_px).
-double ArmDistance_px(const StarDetectorOptions& o, const PixelPoint& m, double x_px, double y_px) {
-  const double dx = x_px - m.x_px, dy = y_px - m.y_px;
-  double d = 1e300;
-  for (const PixelPoint& a : o.mask_arm_axes_px) d = std::min(d, std::abs(dx * a.y_px - dy * a.x_px));
-  return d;
-}
-
 // What every component of a band is measured with.
 struct BandContext {
   const Band& b;
@@ -170,11 +162,13 @@ std::optional<DetectedStar> ShapeDefect(const BandContext& k, const Component& c
   bool sparse = long_side > 4.0 * o.psf_fwhm_px && c.area < 0.3 * c.width * c.height;
   if (sparse && k.dash_mode && MaskElongation(k.im.labels, c) > 3.0) sparse = false;  // a slanted dash, not a cross
   bool masked = false;
-  for (const PixelPoint& m : o.mask_px) {
+  const StarMask& mask = o.mask;
+  for (const PixelPoint& m : mask.points_px) {
     const double r = std::hypot(m.x_px - peak.x, m.y_px - peak_y_abs);
-    if (r < o.mask_radius_px && (o.mask_arm_reach_px <= 0 || ArmDistance_px(o, m, peak.x, peak_y_abs) <= o.mask_arm_reach_px))
+    if (r < mask.radius_px &&
+        (mask.arm_reach_px <= 0 || mask.ArmDistance_px(m, {double(peak.x), double(peak_y_abs)}) <= mask.arm_reach_px))
       masked = true;
-    if (o.mask_arm_reach_px > 0 && r < o.mask_radius_px + k.window_reach * std::sqrt(2.0)) near_crosses->push_back(m);
+    if (mask.arm_reach_px > 0 && r < mask.radius_px + k.window_reach * std::sqrt(2.0)) near_crosses->push_back(m);
   }
   if (!line_like && !sparse && !masked) return std::nullopt;
   if (!line_like) return Defect(peak.x, peak_y_abs, sparse ? "cross" : "masked");
@@ -213,7 +207,8 @@ ComponentPixels GatherPixels(const BandContext& k, const Component& c, const Fit
   const StarDetectorOptions& o = k.o;
   const auto on_arm = [&](int x, long y_abs) {
     for (const PixelPoint& m : near_crosses)
-      if (std::hypot(m.x_px - x, m.y_px - y_abs) < o.mask_radius_px && ArmDistance_px(o, m, x, y_abs) <= o.mask_arm_half_width_px)
+      if (std::hypot(m.x_px - x, m.y_px - y_abs) < o.mask.radius_px &&
+          o.mask.ArmDistance_px(m, {double(x), double(y_abs)}) <= o.mask.arm_half_width_px)
         return true;
     return false;
   };

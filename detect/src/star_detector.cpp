@@ -84,6 +84,34 @@ std::string StarFlagNames(unsigned flags) {
   return s;
 }
 
+double StarMask::ArmDistance_px(const PixelPoint& m, const PixelPoint& p) const {
+  const double dx = p.x_px - m.x_px, dy = p.y_px - m.y_px;
+  double d = 1e300;
+  for (const PixelPoint& a : arm_axes_px) d = std::min(d, std::abs(dx * a.y_px - dy * a.x_px));
+  return d;
+}
+
+bool StarMask::Covers(const PixelPoint& p, double extent_px) const {
+  for (const PixelPoint& m : points_px)
+    if (std::hypot(p.x_px - m.x_px, p.y_px - m.y_px) < radius_px + extent_px &&
+        (arm_reach_px <= 0 || ArmDistance_px(m, p) <= arm_reach_px + extent_px))
+      return true;
+  return false;
+}
+
+bool StarMask::Check(std::string* why) const {
+  auto fail = [why](const std::string& m) {
+    if (why) *why = "mask: " + m;
+    return false;
+  };
+  if (!(radius_px >= 0)) return fail("radius_px must be >= 0");
+  if (!(arm_reach_px >= 0 && arm_half_width_px >= 0)) return fail("arm_reach_px, arm_half_width_px must be >= 0");
+  if (arm_reach_px > 0)
+    for (const PixelPoint& a : arm_axes_px)
+      if (std::abs(std::hypot(a.x_px, a.y_px) - 1.0) > 1e-6) return fail("arm_axes_px must be unit vectors");
+  return true;
+}
+
 bool StarDetectorOptions::Check(std::string* why) const {
   auto fail = [why](const std::string& m) {
     if (why) *why = m;
@@ -99,11 +127,8 @@ bool StarDetectorOptions::Check(std::string* why) const {
   if (!(max_fwhm_ratio > 1 && min_fwhm_ratio > 0 && min_fwhm_ratio < 1)) return fail("fwhm ratio limits must bracket 1");
   if (!(max_ellipticity > 0 && max_ellipticity < 1)) return fail("max_ellipticity must be in (0, 1)");
   if (!(max_component_fwhm > 2)) return fail("max_component_fwhm must exceed 2");
-  if (!(pair_chi2_gain > 0) || !(min_snr > 0) || !(mask_radius_px >= 0)) return fail("pair_chi2_gain, min_snr must be positive");
-  if (!(mask_arm_reach_px >= 0 && mask_arm_half_width_px >= 0)) return fail("mask_arm_reach_px, mask_arm_half_width_px must be >= 0");
-  if (mask_arm_reach_px > 0)
-    for (const PixelPoint& a : mask_arm_axes_px)
-      if (std::abs(std::hypot(a.x_px, a.y_px) - 1.0) > 1e-6) return fail("mask_arm_axes_px must be unit vectors");
+  if (!(pair_chi2_gain > 0) || !(min_snr > 0)) return fail("pair_chi2_gain, min_snr must be positive");
+  if (!mask.Check(why)) return false;
   if (!(max_dash_length_px >= 0 && max_dash_length_px <= 2000)) return fail("max_dash_length_px must be 0..2000");
   if (!(dash_length_tolerance >= 0 && dash_length_tolerance <= 2)) return fail("dash_length_tolerance must be 0..2");
   if (!(max_dash_width_ratio > 1)) return fail("max_dash_width_ratio must exceed 1");

@@ -135,16 +135,16 @@ StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint
     // Crosses are not stars: mask every cross found, out to half its arm, along its arms (the grid's axes
     // in the scan): star images between the arms are measured, the arms' pixels left out of their fits.
     for (const DetectedPoint& p : context.reseau->points)
-      if (p.status != PointStatus::kMissing) options.mask_px.push_back(p.position_px);
-    options.mask_radius_px = 0.5 * context.grid->mark.arm_length_um / context.pixel_size_um + 3.0;
+      if (p.status != PointStatus::kMissing) options.mask.points_px.push_back(p.position_px);
+    options.mask.radius_px = 0.5 * context.grid->mark.arm_length_um / context.pixel_size_um + 3.0;
     const double* a = context.reseau->plate_to_pixel.a;
     const double x_scale = std::hypot(a[0], a[2]), y_scale = std::hypot(a[1], a[3]);
     if (context.grid->mark.type == MarkType::kCross && x_scale > 0 && y_scale > 0) {
-      options.mask_arm_axes_px[0] = {a[0] / x_scale, a[2] / x_scale};
-      options.mask_arm_axes_px[1] = {a[1] / y_scale, a[3] / y_scale};
+      options.mask.arm_axes_px[0] = {a[0] / x_scale, a[2] / x_scale};
+      options.mask.arm_axes_px[1] = {a[1] / y_scale, a[3] / y_scale};
       // Half the line plus 3 sigma of a scan's blur (~0.5 px); an arm's own pieces peak within it.
-      options.mask_arm_half_width_px = 0.5 * context.grid->mark.line_width_um / context.pixel_size_um + 1.5;
-      options.mask_arm_reach_px = options.mask_arm_half_width_px;
+      options.mask.arm_half_width_px = 0.5 * context.grid->mark.line_width_um / context.pixel_size_um + 1.5;
+      options.mask.arm_reach_px = options.mask.arm_half_width_px;
     }
   }
   std::optional<UtcInstant> start_utc;
@@ -168,6 +168,7 @@ StageOutput RunStarStage(const DetectContext& context, std::vector<MeasuredPoint
     trail_options.image_max_px = {context.image.info().width_px - 1.0, context.image.info().height_px - 1.0};
     trail_options.exposed_outline_px = ExposedOutline_px(context);
     trail_options.require_joined = request.trails->require_joined;
+    trail_options.blind = options.mask;
   }
   StarDetectionStats stats;
   const std::vector<DetectedStar> stars = DetectStars(context.image, options, &stats);

@@ -276,13 +276,13 @@ scratch_width_um = 20.0
   EXPECT_EQ(measured, 0);
   EXPECT_GE(defects, crosses);  // every cross seen and rejected
   for (const MeasuredPoint& t : r.plate.truth)
-    if (t.kind == PointKind::kReseau && t.x_px) o.mask_px.push_back({*t.x_px, *t.y_px});
+    if (t.kind == PointKind::kReseau && t.x_px) o.mask.points_px.push_back({*t.x_px, *t.y_px});
   stars = DetectStars(image, o);
   measured = 0;
   for (const DetectedStar& s : stars) measured += s.point.status == PointStatus::kMeasured;
   EXPECT_EQ(measured, 0);
   // Trail mode (dashes up to 6 FWHM long measured): still no star from crosses, dust or scratches.
-  o.mask_px.clear();
+  o.mask.points_px.clear();
   o.max_dash_length_px = 6.0 * o.psf_fwhm_px;
   stars = DetectStars(image, o);
   measured = 0;
@@ -592,12 +592,12 @@ TEST(StarDetectorTest, StarsBetweenACrossArmsAreMeasured) {
   StarDetectorOptions disk;
   disk.dark = false;
   disk.psf_fwhm_px = 2.3548 * psf_sigma_px;
-  disk.mask_px = crosses;
-  disk.mask_radius_px = 0.5 * arm_px + 3.0;
+  disk.mask.points_px = crosses;
+  disk.mask.radius_px = 0.5 * arm_px + 3.0;
   StarDetectorOptions unmasked = disk, arms = disk;
-  unmasked.mask_px.clear();
-  arms.mask_arm_axes_px[0] = u, arms.mask_arm_axes_px[1] = v;
-  arms.mask_arm_half_width_px = arms.mask_arm_reach_px = 0.5 + 1.5;
+  unmasked.mask.points_px.clear();
+  arms.mask.arm_axes_px[0] = u, arms.mask.arm_axes_px[1] = v;
+  arms.mask.arm_half_width_px = arms.mask.arm_reach_px = 0.5 + 1.5;
   // Stars measured, their error RMS per axis and mean pull toward the nearer arm; images measured on an arm.
   struct Score {
     int measured = 0, on_arms = 0;
@@ -620,7 +620,7 @@ TEST(StarDetectorTest, StarsBetweenACrossArmsAreMeasured) {
       for (const PixelPoint& c : crosses) {
         const double dx = f.point.position_px.x_px - c.x_px, dy = f.point.position_px.y_px - c.y_px;
         const double across = std::min(std::abs(dx * u.y_px - dy * u.x_px), std::abs(dx * v.y_px - dy * v.x_px));
-        sc.on_arms += std::hypot(dx, dy) < disk.mask_radius_px && across < 2.5;
+        sc.on_arms += std::hypot(dx, dy) < disk.mask.radius_px && across < 2.5;
       }
     }
     return sc;
@@ -642,7 +642,7 @@ TEST(StarDetectorTest, StarsBetweenACrossArmsAreMeasured) {
       EXPECT_EQ(score(stars, crossed, disk).measured, 0) << "the disk mask takes every star between the arms";
     } else {
       StarDetectorOptions arm_pixels_in = arms;
-      arm_pixels_in.mask_arm_half_width_px = 0.0;
+      arm_pixels_in.mask.arm_half_width_px = 0.0;
       // The arms' pixels in the fits push them away, or leave profiles no star has (refused as shape).
       const Score in = score(stars, crossed, arm_pixels_in);
       EXPECT_TRUE(in.pull_px < -0.02 || in.measured < n / 2) << "pull " << in.pull_px << ", " << in.measured << " of " << n;
@@ -660,8 +660,8 @@ TEST(StarDetectorTest, InvalidOptionsThrow) {
   o.max_dash_length_px = -1.0;
   EXPECT_THROW(DetectStarsInBuffer(v.data(), 10, 10, 255, o), Error);
   o = StarDetectorOptions{};
-  o.mask_arm_reach_px = 2.0;
-  o.mask_arm_axes_px[0] = {2.0, 0.0};
+  o.mask.arm_reach_px = 2.0;
+  o.mask.arm_axes_px[0] = {2.0, 0.0};
   EXPECT_THROW(DetectStarsInBuffer(v.data(), 10, 10, 255, o), Error);
 }
 

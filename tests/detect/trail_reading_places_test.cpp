@@ -30,7 +30,7 @@ struct HandStar {
   PixelPoint origin{1000.0, 2500.0};
   double t0_s = schedule.front().mid_s;
   std::vector<DetectedStar> images;
-  std::vector<int> trail_of;  // the image's trail number (its right reading's tag)
+  std::vector<ImageTag> tag_of;  // the image's tag: its right reading's (trail number, mid-time)
 
   PixelPoint At(double t_s) const {
     return {origin.x_px + kVelocity_px_per_s.x_px * (t_s - t0_s), origin.y_px + kVelocity_px_per_s.y_px * (t_s - t0_s)};
@@ -48,7 +48,7 @@ struct HandStar {
     d.angle_deg = std::atan2(kVelocity_px_per_s.y_px, kVelocity_px_per_s.x_px) * 180.0 / M_PI;
     d.flags = flags | (d.length_px > 0 ? kStarElongated : 0u);
     images.push_back(d);
-    trail_of.push_back(e.trail);
+    tag_of.push_back({e.trail, e.mid_s});
   }
   int ImageOf(int trail, int dash_index) const {  // the star's image of that dash
     for (size_t i = 0; i < schedule.size(); ++i)
@@ -65,7 +65,7 @@ DashPlaces Places(const HandStar& star, double seed_s, double min_dot_flux_dn = 
   const double span_s = star.schedule.back().mid_s - star.schedule.front().mid_s;
   const FlowPath path(hand.flow, star.origin, span_s);
   return ReadingPlaces(hand.c, hand.all, path, star.origin, seed_s, kFluxPerS, min_dot_flux_dn,
-                       [&](int i) { return star.trail_of[i]; });
+                       [&](int i) { return star.tag_of[i]; });
 }
 
 TEST(ReadingPlaces, ARightReadingFindsItsDashPlacesHeld) {
@@ -91,7 +91,7 @@ TEST(ReadingPlaces, AReadingWhoseDashPlacesAnotherStarHoldsIsRefusedByItsDots) {
   for (const ShutterExposure& e : star.schedule)  // the twin's dashes at the reading's dash places
     if (e.kind == ExposureKind::kDash) {
       star.Add(star.At(e.mid_s - shift_s), kFluxPerS * e.duration_s, e, 0);
-      star.trail_of.back() = 0;  // (not decoded)
+      star.tag_of.back() = {};  // (not decoded)
     }
   const DashPlaces twin = Places(star, star.t0_s + shift_s);
   std::printf("[reading places] seed read 240 s late: dashes %d of %d empty (%d without the twin), dots %d of %d\n",
@@ -103,6 +103,50 @@ TEST(ReadingPlaces, AReadingWhoseDashPlacesAnotherStarHoldsIsRefusedByItsDots) {
   // The star's right reading keeps every place held with the twin's dashes beside it.
   const DashPlaces right = Places(star, star.t0_s);
   EXPECT_EQ(right.empty + right.dot_empty, 0);
+}
+
+// Lisbon (docs/trails_record.md, 2026-12-07, stop 49): a star already decoded (its images tagged with their
+// exposures) whose separator, left untagged in a crowd, seeds a reading one group (240 s) off. Its images
+// tagged with other exposures than the reading puts there hold none of its places; untagged, they would.
+TEST(ReadingPlaces, AStarsImagesTaggedWithOtherExposuresHoldNoneOfAReadingOneGroupOff) {
+  const HandStar tagged;
+  HandStar untagged;
+  for (ImageTag& t : untagged.tag_of) t = {};
+  for (const double shift_s : {240.0, -240.0}) {
+    const DashPlaces off = Places(tagged, tagged.t0_s + shift_s), fresh = Places(untagged, untagged.t0_s + shift_s);
+    std::printf("[reading places] one group off (%+.0f s): empty %d of %d dash, %d of %d dot places (untagged: %d, %d)\n",
+                shift_s, off.empty, off.inside, off.dot_empty, off.dot_inside, fresh.empty, fresh.dot_empty);
+    EXPECT_GT(EmptyPlacesLogOdds(off), std::log(kRefuteOdds)) << shift_s;
+    EXPECT_LT(fresh.empty + fresh.dot_empty, off.empty + off.dot_empty) << shift_s;
+  }
+  // Tagged with the reading's own exposures (the star decoded twice, rightly), they hold every place.
+  const DashPlaces right = Places(tagged, tagged.t0_s);
+  EXPECT_EQ(right.empty + right.dot_empty, 0);
+}
+
+// Lisbon's KS13794 (docs/trails_record.md, 2026-12-07, stop 49), before its star was decoded: a dash read one
+// group off found its star's own images at most places; in its crowd 5 of 46 places fell empty (leaning
+// right). ReadingRefuted compares every other timing of the seed: the right one leaves fewer places empty.
+// (Here, without the crowd, the wrong reading is refuted on its own too; the comparison is what is tested.)
+TEST(ReadingPlaces, AReadingOneGroupOffGivesWayToTheRightTimingOfItsSeed) {
+  HandStar star;
+  for (ImageTag& t : star.tag_of) t = {};  // (not decoded)
+  const size_t own = star.images.size();
+  const PixelPoint across{-kVelocity_px_per_s.y_px / 0.4123, kVelocity_px_per_s.x_px / 0.4123};  // unit normal
+  for (size_t i = 0; i < own; ++i) {  // a decoded neighbour 40 px aside: every trail was exposed
+    const PixelPoint p = star.images[i].point.position_px;
+    star.Add({p.x_px + 40.0 * across.x_px, p.y_px + 40.0 * across.y_px}, star.images[i].flux_dn, star.schedule[i], 0);
+  }
+  const DashPlaces right = Places(star, star.t0_s);
+  for (const double shift_s : {240.0, -240.0}) {
+    const DashPlaces off = Places(star, star.t0_s + shift_s);
+    std::printf("[reading places] one group off (%+.0f s), star undecoded: %d of %d dash, %d of %d dot places empty, "
+                "log odds %.1f; right: %d of %d, %d of %d\n", shift_s, off.empty, off.inside, off.dot_empty,
+                off.dot_inside, EmptyPlacesLogOdds(off), right.empty, right.inside, right.dot_empty, right.dot_inside);
+    EXPECT_TRUE(OtherReadingLikelier(off, right)) << shift_s;
+  }
+  EXPECT_EQ(right.empty + right.dot_empty, 0);
+  EXPECT_FALSE(OtherReadingLikelier(right, Places(star, star.t0_s + 240.0)));
 }
 
 TEST(ReadingPlaces, AReadingAnExposureOffFindsManyEmptyAndIsRefused) {
@@ -131,7 +175,7 @@ TEST(ReadingPlaces, ADashHiddenBesideABrightStarSaysNothingAndAHalvedOneHoldsIts
   HandStar bare = star;
   star.Add({q.x_px + 4.0 * across.x_px, q.y_px + 4.0 * across.y_px}, 50.0 * kFluxPerS * e_hidden.duration_s,
            e_hidden, 0);
-  star.trail_of.back() = 0;
+  star.tag_of.back() = {};
   const DashPlaces without_neighbour = Places(bare, bare.t0_s);
   EXPECT_EQ(without_neighbour.empty, 1);  // the missing dash, alone, is an empty place
   const DashPlaces beside_bright = Places(star, star.t0_s);
@@ -164,9 +208,16 @@ TEST(ReadingPlaces, ALoneReadingLeaningWrongGivesWayToANumberLeavingTwoFewerPlac
   EXPECT_FALSE(OtherReadingLikelier(as_t1, counted_t2));
   const DashPlaces right_t2 = places(0, 12, 0, 7), as_t4 = places(0, 26, 1, 31);
   EXPECT_FALSE(OtherReadingLikelier(right_t2, as_t4));
-  // One empty place fewer is not enough (10 times likelier, not 100), nor is a reading not leaning wrong.
+  // One empty place fewer is not enough (10 times likelier, not 100), nor, against a reading not leaning
+  // wrong, one looking at fewer places (it has fewer to find empty).
   EXPECT_FALSE(OtherReadingLikelier(places(2, 18, 0, 4), places(1, 13, 0, 2)));
   EXPECT_FALSE(OtherReadingLikelier(places(2, 30, 0, 40), places(0, 13, 0, 2)));
+  // Lisbon's KS13794 (2026-12-07, stop 49): its flow reading one group off, 4 of 28 dash and 1 of 18 dot
+  // places empty (log odds -1.9, leaning right), against 0 of 28 and 0 of 25 for its seed read right.
+  const DashPlaces group_off = places(4, 28, 1, 18), read_right = places(0, 28, 0, 25);
+  EXPECT_LT(EmptyPlacesLogOdds(group_off), 0.0);
+  EXPECT_TRUE(OtherReadingLikelier(group_off, read_right));
+  EXPECT_FALSE(OtherReadingLikelier(read_right, group_off));
 }
 
 }  // namespace

@@ -42,6 +42,7 @@ class TrailDecoder {
     PixelPoint before_px;
     double spacing_px = 0, dash_flux_dn = 0, dash_length_px = 0;
     bool before_occupied = false;
+    bool run_merged = false;  // a dash of the run holds another image's light: the count may join two stars' runs
     Taken grown;             // a run's images as grown (steps 1-2), before Settle
     // Stars as a union-find over chains: the parent, and at a root the trail numbers (bit t: trail t + 1) held.
     int parent = 0;
@@ -83,7 +84,9 @@ class TrailDecoder {
   void ForMissingTrails(const std::function<void(int root, int s, int k, double t_end_s, const PixelPoint& origin)>& fn);
   void CompleteStars();
   std::vector<int> FlowSeeds() const;
-  DashPlaces PlacesOfReading(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s) const;
+  DashPlaces PlacesOfReading(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s,
+                             int max_empty = std::numeric_limits<int>::max()) const;
+  TagOf TagOfImages() const;  // each image's tag (trail number, mid-time), for the empty places
   bool ReadingRefuted(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s);
   bool LoneNumberRefuted(int dash, const LoneTrail& lone, double seed_s, const std::vector<Taken>& taken);
   int FlowPlaceImage(const FlowPath& path, double dt_s, const PixelPoint& origin, const ShutterExposure& e,

@@ -31,12 +31,12 @@ void TrailDecoder::FlowTrails() {
   }
   // Lone trails: stars the loop above left undecided, numbered by their runs (nothing else confirms the
   // number: not with require_joined).
-  const auto trail_of = [&](int i) { return result_.images[i].assigned ? result_.images[i].trail : 0; };
+  const TagOf tag_of = TagOfImages();
   if (o_.ablation.flow_lone_trails && !o_.require_joined)
     for (int dash : seeds) {
       if (result_.images[dash].chain >= 0) continue;
       LoneTrail lone;
-      if (!DecodeLoneTrail(c_, *all_, flow_, dash, excluded, trail_of, &lone)) continue;
+      if (!DecodeLoneTrail(c_, *all_, flow_, dash, excluded, tag_of, &lone)) continue;
       std::vector<Taken> per_trail(trails_);
       per_trail[lone.trail] = lone.taken;
       double seed_s = std::nan("");  // (the seed is one of the run's dashes it took)
@@ -190,20 +190,38 @@ void TrailDecoder::ForMissingTrails(
     }
 }
 
+TagOf TrailDecoder::TagOfImages() const {
+  return [this](int i) {
+    const TrailImage& ti = result_.images[i];
+    return ti.assigned ? ImageTag{ti.trail, ti.mid_s} : ImageTag{};
+  };
+}
+
 // A reading's places (the seed at seed_s; its images `taken` per trail; docs/trails.md "Empty places"): counted
 // at the reading's faintest dash's flux, its dots where the detector cannot have missed them.
 DashPlaces TrailDecoder::PlacesOfReading(int dash, double seed_s, const std::vector<Taken>& taken,
-                                         double flux_per_s) const {
-  const auto trail_of = [&](int i) { return result_.images[i].assigned ? result_.images[i].trail : 0; };
+                                         double flux_per_s, int max_empty) const {
   return ReadingPlaces(c_, *all_, PlatePath(c_, flow_, c_.p[dash]), c_.p[dash], seed_s,
-                       FaintestDashRate(c_, taken, flux_per_s), kDetectedDotSnr * images_[dash].sigma_flux_dn, trail_of);
+                       FaintestDashRate(c_, taken, flux_per_s), kDetectedDotSnr * images_[dash].sigma_flux_dn, TagOfImages(),
+                       max_empty);
 }
 
 // Whether a reading is refused for the places it predicts empty: they must not make it kRefuteOdds times
-// likelier wrong than right.
+// likelier wrong than right, nor leave two more places empty than another timing of its seed
+// (OtherReadingLikelier).
 bool TrailDecoder::ReadingRefuted(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s) {
   if (!o_.ablation.flow_empty_places) return false;
-  const bool refuted = EmptyPlacesLogOdds(PlacesOfReading(dash, seed_s, taken, flux_per_s)) > std::log(kRefuteOdds);
+  const DashPlaces own = PlacesOfReading(dash, seed_s, taken, flux_per_s);
+  const double own_log_odds = EmptyPlacesLogOdds(own);
+  bool refuted = own_log_odds > std::log(kRefuteOdds);
+  const int rival_max_empty = own.empty + own.dot_empty - 2;  // (a rival with more cannot be likelier)
+  // Compared with the seed read as each other dash of the program (Lisbon's KS13794, docs/trails_record.md:
+  // read one group off, 5 of 46 places empty, leaning right; read right, 0 of 53). Only readings with an
+  // empty place can be outdone.
+  for (int u = 0; u < trails_ && !refuted && own.empty + own.dot_empty >= 2; ++u)
+    for (const ShutterExposure& e : c_.per_trail[u])
+      if (!refuted && e.kind == ExposureKind::kDash && std::abs(e.mid_s - seed_s) >= kSameExposure_s)
+        refuted = OtherReadingLikelier(own, PlacesOfReading(dash, e.mid_s, taken, flux_per_s, rival_max_empty));
   result_.refused_readings += refuted;
   return refuted;
 }
@@ -220,10 +238,11 @@ bool TrailDecoder::LoneNumberRefuted(int dash, const LoneTrail& lone, double see
   int j_seed = -1;  // the seed's exposure in the trail, and where the runs' lengths put it under trail u
   for (const auto& [j, i] : lone.taken)
     if (i == dash) j_seed = j;
-  for (int u = 0; u < trails_ && !refuted && own_log_odds > 0.0 && j_seed >= 0; ++u) {  // (else none is likelier)
+  for (int u = 0; u < trails_ && !refuted && own.empty + own.dot_empty >= 2 && j_seed >= 0; ++u) {  // (else none is likelier)
     const int ju = j_seed + program_.leading_dashes[u] - program_.leading_dashes[lone.trail];
     if (u == lone.trail || ju < 0 || ju >= static_cast<int>(c_.per_trail[u].size())) continue;
-    refuted = OtherReadingLikelier(own, PlacesOfReading(dash, c_.per_trail[u][ju].mid_s, taken, lone.flux_per_s));
+    refuted = OtherReadingLikelier(own, PlacesOfReading(dash, c_.per_trail[u][ju].mid_s, taken, lone.flux_per_s,
+                                                        own.empty + own.dot_empty - 2));
   }
   result_.refused_readings += refuted;
   return refuted;

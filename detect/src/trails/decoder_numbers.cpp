@@ -151,8 +151,11 @@ bool TrailDecoder::ConfirmedAlone(int k) {
   // A slow star's 10 s gaps (a third of the spacing) within the PSF: its dashes merge, a lost one leaves no
   // trace in front of the run.
   const bool unresolved = cs.spacing_px / 3.0 < o_.psf_fwhm_px;
-  if (clean && !cs.before_occupied && !unresolved) return true;
+  // A run holding a merged dash may be two stars' runs end to end (one star's last dashes on the other's first
+  // ones, on one diurnal path): its count is no trail's.
+  if (clean && !cs.before_occupied && !cs.run_merged && !unresolved) return true;
   result_.chains[k].reason = cs.before_occupied ? TrailReason::kImageBeforeRun
+                             : cs.run_merged    ? TrailReason::kBlended
                              : unresolved       ? TrailReason::kUnresolvedRun
                                                 : TrailReason::kUnconfirmed;
   return false;

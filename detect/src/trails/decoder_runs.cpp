@@ -75,6 +75,7 @@ void TrailDecoder::DecodeRun(const std::vector<int>& run) {
   DashHolder holder{dash_flux, dash_length};
   ForReaching(c_, *all_, before, std::max(o_.tuning.min_tolerance_px, 0.5 * Dist(a, b)),
               [&](int i) { holder.Add(images_[i]); });
+  holder.held = holder.held || Blind(o_, before, dash_length);  // a dash there would have been lost in a cross
   tc.trail = t + 1;
   tc.rate_px_per_s = grown[dir].rate_px_per_s;
   tc.missed_exposures = grown[dir].missed;
@@ -82,12 +83,14 @@ void TrailDecoder::DecodeRun(const std::vector<int>& run) {
   // An inner dash of the run blended with another image (its flux off the run's) keeps the run's count but
   // is not tagged itself: its position is not this star's alone.
   Taken taken;
+  bool run_merged = false;
   for (const auto& [j, i] : grown[dir].taken) {
     const double duration_s = c_.per_trail[t][j].duration_s;
     if (j < tc.leading_dashes && flux_per_s > 0 &&
         std::abs(images_[i].flux_dn - flux_per_s * duration_s) >
             o_.tuning.run_flux_tolerance * flux_per_s * duration_s + 4.0 * images_[i].sigma_flux_dn) {
       result_.images[i].reason = TrailReason::kBlended;
+      run_merged = true;
       continue;
     }
     taken.push_back({j, i});
@@ -96,6 +99,7 @@ void TrailDecoder::DecodeRun(const std::vector<int>& run) {
   const int cid = PushChain(tc);
   ChainState& cs = chain_[cid];
   cs.before_occupied = holder.Holds();
+  cs.run_merged = run_merged;
   cs.before_px = before;
   cs.spacing_px = Dist(a, b);
   cs.dash_flux_dn = dash_flux, cs.dash_length_px = dash_length;

@@ -85,6 +85,8 @@ inline constexpr int kShownImages = 3;
 // An empty place of a trail counts where an image of that trail (any star's) is tagged within this (a cloud
 // or a shutter fault during one trail empties its places on every star).
 inline constexpr double kExposedRadius_px = 150.0;
+// Two tags of one exposure have the same mid-time (the program's); any two exposures are 30 s or more apart.
+inline constexpr double kSameExposure_s = 1.0;
 
 // --- A reading's empty places (reading_places.cpp; DecodeByFlow's and DecodeLoneTrail's readings)
 // The share of a reading's places the plate shows empty, by flux (ReadingPlaces), when the reading is right

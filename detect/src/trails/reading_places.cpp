@@ -35,7 +35,7 @@ bool Dominated(const Context& c, const Grid& all, const PixelPoint& q, double da
 // Exposure e of trail s predicted along `path` (the seed at p at seed_s), counted in *places as DashPlaces
 // (trail_internal.h) says: whether it lies inside, and whether it is empty.
 void CountPlace(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s, int s,
-                const ShutterExposure& e, double flux_per_s, const std::function<int(int)>& trail_of,
+                const ShutterExposure& e, double flux_per_s, const TagOf& tag_of,
                 DashPlaces* places) {
   const TrailOptions& o = c.o;
   const double dt = e.mid_s - seed_s;
@@ -43,18 +43,22 @@ void CountPlace(const Context& c, const Grid& all, const FlowPath& path, const P
   const PixelPoint q = path.At(dt), v = path.VelocityAt(dt);
   if (!Inside(o, q, o.edge_margin_px)) return;
   const double image_flux_dn = flux_per_s * e.duration_s;
-  if (Dominated(c, all, q, image_flux_dn, std::hypot(v.x_px, v.y_px) * e.duration_s)) return;
+  const double length_px = std::hypot(v.x_px, v.y_px) * e.duration_s;
+  if (Dominated(c, all, q, image_flux_dn, length_px) || Blind(o, q, length_px)) return;
   const bool dash = e.kind == ExposureKind::kDash;
   ++(dash ? places->inside : places->dot_inside);
   // Only where trail s was exposed: another star's image of it tagged nearby (a cloud or a shutter fault
   // during one trail empties its places on every star).
   bool exposed = false;
-  all.Near(q.x_px, q.y_px, kExposedRadius_px, [&](int i) { exposed = exposed || trail_of(i) == s + 1; });
+  all.Near(q.x_px, q.y_px, kExposedRadius_px, [&](int i) { exposed = exposed || tag_of(i).trail == s + 1; });
   const double tol_px = FlowTolerance_px(o, q, p);
-  // (An image tagged as another trail number of another star, whose flux leaves no room for this image,
-  // holds none of it; one tagged with trail s may be the star's own.)
+  // (An image tagged as another exposure of another star, whose flux leaves no room for this image, holds
+  // none of it; one tagged with this very exposure may be the star's own, decoded as another star's. The
+  // same star read one group off has its images tagged with other exposures: they do not hold its places.)
   const auto explained = [&](int i) {
-    return trail_of(i) > 0 && trail_of(i) != s + 1 && CannotHideDash(c, i, image_flux_dn);
+    const ImageTag tag = tag_of(i);
+    return tag.trail > 0 && !(tag.trail == s + 1 && std::abs(tag.mid_s - e.mid_s) < kSameExposure_s) &&
+           CannotHideDash(c, i, image_flux_dn);
   };
   const bool empty = exposed && DashPlaceEmpty(c, all, q, v, image_flux_dn, e.duration_s, tol_px, true, explained);
   (dash ? places->empty : places->dot_empty) += empty;
@@ -63,20 +67,22 @@ void CountPlace(const Context& c, const Grid& all, const FlowPath& path, const P
 }  // namespace
 
 DashPlaces CountDashPlaces(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s,
-                           int s, double flux_per_s, const std::function<int(int)>& trail_of) {
+                           int s, double flux_per_s, const TagOf& tag_of) {
   DashPlaces places;
   for (const ShutterExposure& e : c.per_trail[s])
-    if (e.kind == ExposureKind::kDash) CountPlace(c, all, path, p, seed_s, s, e, flux_per_s, trail_of, &places);
+    if (e.kind == ExposureKind::kDash) CountPlace(c, all, path, p, seed_s, s, e, flux_per_s, tag_of, &places);
   return places;
 }
 
 DashPlaces ReadingPlaces(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s,
-                         double flux_per_s, double min_dot_flux_dn, const std::function<int(int)>& trail_of) {
+                         double flux_per_s, double min_dot_flux_dn, const TagOf& tag_of, int max_empty) {
   DashPlaces places;
   for (int s = 0; s < static_cast<int>(c.per_trail.size()); ++s)
-    for (const ShutterExposure& e : c.per_trail[s])
+    for (const ShutterExposure& e : c.per_trail[s]) {
       if (e.kind == ExposureKind::kDash || flux_per_s * e.duration_s >= min_dot_flux_dn)
-        CountPlace(c, all, path, p, seed_s, s, e, flux_per_s, trail_of, &places);
+        CountPlace(c, all, path, p, seed_s, s, e, flux_per_s, tag_of, &places);
+      if (places.empty + places.dot_empty > max_empty) return places;
+    }
   return places;
 }
 
@@ -92,7 +98,8 @@ double FaintestDashRate(const Context& c, const std::vector<std::vector<std::pai
 
 bool OtherReadingLikelier(const DashPlaces& own, const DashPlaces& other) {
   const int fewer_empty = own.empty + own.dot_empty - other.empty - other.dot_empty;
-  return EmptyPlacesLogOdds(own) > 0.0 &&
+  const bool as_many_places = other.inside + other.dot_inside >= own.inside + own.dot_inside;
+  return (as_many_places || EmptyPlacesLogOdds(own) > 0.0) &&
          fewer_empty * std::log(kEmptyWhenWrong / kEmptyWhenRight) >= std::log(kRefuteOdds) - 1e-9;
 }
 

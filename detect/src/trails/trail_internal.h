@@ -96,6 +96,17 @@ class Grid {
 // (exposed_outline_px, when set) by at least margin_px.
 bool Inside(const TrailOptions& o, const PixelPoint& p, double margin_px);
 
+// What image i is tagged with: its trail number (1..; 0: untagged) and exposure's mid-time.
+struct ImageTag {
+  int trail = 0;
+  double mid_s = 0;
+};
+using TagOf = std::function<ImageTag(int)>;
+
+// Whether an image at p, length_px long (0: a point), would touch what the detector masked (TrailOptions::blind):
+// it would not have been detected, so its absence proves nothing.
+bool Blind(const TrailOptions& o, const PixelPoint& p, double length_px);
+
 // What every step of the linker reads.
 struct Context {
   const std::vector<DetectedStar>& images;
@@ -366,18 +377,20 @@ bool DecodeByFlow(const Context& c, const Grid& all, const SkyFlow& flow, int da
 // `empty` counts those of them where trail s was exposed (an image of it, any star's, tagged within
 // kExposedRadius_px) and nothing could hold the dash, judged by flux (DashPlaceEmpty, by_flux; an image
 // tagged as another number whose flux tolerance could not have let the dash through holds nothing).
-// trail_of(i): the trail number (1..) image i is tagged with, 0 if none.
+// tag_of(i): the trail number (1..) and exposure time image i is tagged with (trail 0: untagged).
 struct DashPlaces {
   int inside = 0, empty = 0;          // dash places
   int dot_inside = 0, dot_empty = 0;  // dot places (ReadingPlaces)
 };
 DashPlaces CountDashPlaces(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s,
-                           int s, double flux_per_s, const std::function<int(int)>& trail_of);
+                           int s, double flux_per_s, const TagOf& tag_of);
 // A whole reading's places (the seed at p at seed_s): every trail's dash places as CountDashPlaces counts
 // them, and so its dot places where the dot's flux (flux_per_s x its duration) is at least min_dot_flux_dn,
 // bright enough that the detector cannot have missed it.
+// max_empty: counting stops beyond that many empty places (a rival reading that cannot be likelier).
 DashPlaces ReadingPlaces(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s,
-                         double flux_per_s, double min_dot_flux_dn, const std::function<int(int)>& trail_of);
+                         double flux_per_s, double min_dot_flux_dn, const TagOf& tag_of,
+                         int max_empty = std::numeric_limits<int>::max());
 // The flux per second of a reading's faintest dash (taken: per trail, (exposure, image); evidence only), at
 // most flux_per_s: a blend only adds flux, so the faintest dash is the star's own.
 double FaintestDashRate(const Context& c, const std::vector<std::vector<std::pair<int, int>>>& taken,
@@ -385,10 +398,11 @@ double FaintestDashRate(const Context& c, const std::vector<std::vector<std::pai
 // The log of how much likelier a reading's empty places are if the reading is wrong than if it is right: each
 // place empty with probability kEmptyWhenWrong or kEmptyWhenRight (evidence.h), independently.
 double EmptyPlacesLogOdds(const DashPlaces& places);
-// Whether another reading of the same images (other) is kRefuteOdds times likelier than a reading leaning wrong
-// (own: log odds above 0). Reading b is exp(LO_a - LO_b) times likelier than a (each place independent, one of
-// them right); counted on the empty places alone (the held ones each reading predicts, whatever its number),
-// two fewer empty places make it so (kEmptyWhenWrong / kEmptyWhenRight = 10 each).
+// Whether another reading of the same images (other) is kRefuteOdds times likelier than own. Reading b is
+// exp(LO_a - LO_b) times likelier than a (each place independent, one of them right); counted on the empty
+// places alone (the held ones each reading predicts, whatever its number), two fewer empty places make it so
+// (kEmptyWhenWrong / kEmptyWhenRight = 10 each). Only where the other reading looks at as many places, or
+// own leans wrong (log odds above 0): a reading putting fewer places on the format has fewer to find empty.
 bool OtherReadingLikelier(const DashPlaces& own, const DashPlaces& other);
 
 // A lone trail (trail_lone.cpp): a star whose other trails are off the format or hidden, numbered by its
@@ -409,10 +423,10 @@ struct LoneTrail {
 // another number; then flow_min_images images, 2 dashes besides the seed, 4 exposure durations (a trail
 // cut by the format's edge: those it shows there, at least 3; flow_cut_trails). A slow star
 // (10 s of motion within 2 tolerances) is not decoded.
-// trail_of(i): the trail number (1..) image i is tagged with, 0 if none (entering trails: a place counts as
+// tag_of(i): the trail number (1..) image i is tagged with, trail 0 if none (entering trails: a place counts as
 // empty only where that trail was exposed, "Trails entering the format").
 bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int dash,
-                     const std::function<bool(int)>& excluded, const std::function<int(int)>& trail_of,
+                     const std::function<bool(int)>& excluded, const TagOf& tag_of,
                      LoneTrail* out);
 
 // Runs of leading dashes (runs.cpp): elongated images equally spaced along a line, each run in spatial order.

@@ -31,10 +31,10 @@ int FirstDot(const std::vector<ShutterExposure>& ex) {
 // places beside a much brighter image do not count). The flow predicts a place to flow_tolerance_px over
 // hundreds of pixels, so an empty place says the trail is not there.
 bool SiblingAbsent(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& p, double seed_s, int u,
-                   double flux_per_s, const std::function<int(int)>& trail_of) {
+                   double flux_per_s, const TagOf& tag_of) {
   for (int s = 0; s < static_cast<int>(c.per_trail.size()); ++s) {
     if (s == u) continue;
-    const DashPlaces places = CountDashPlaces(c, all, path, p, seed_s, s, flux_per_s, trail_of);
+    const DashPlaces places = CountDashPlaces(c, all, path, p, seed_s, s, flux_per_s, tag_of);
     if (places.inside >= 2 && places.empty >= std::max(2, places.inside - 1)) return true;
   }
   return false;
@@ -96,7 +96,7 @@ class LoneReader {
         every_trail_((1u << c.per_trail.size()) - 1u) {}
   bool GroupReadings();
   bool CountRun();
-  int Number(const std::function<int(int)>& trail_of) const;
+  int Number(const TagOf& tag_of) const;
   bool Take(int trail, LoneTrail* out) const;
 
  private:
@@ -118,7 +118,7 @@ class LoneReader {
   void AddReading(int t, int j);
   Explained Explain(int from) const;
   bool PlaceEmpty(int m, bool* stop) const;
-  int NumberEntering(const std::function<int(int)>& trail_of) const;
+  int NumberEntering(const TagOf& tag_of) const;
 
   const Context& c_;
   const TrailOptions& o_;
@@ -229,6 +229,10 @@ LoneReader::Explained LoneReader::Explain(int from) const {
 bool LoneReader::PlaceEmpty(int m, bool* stop) const {
   const double dash_flux = a_dash_.duration_s * flux_per_s_, dash_length = a_dash_.duration_s * speed_px_per_s_;
   const PixelPoint q = path_.At(last_dash_s_ - 30.0 * m);
+  if (Blind(o_, q, dash_length)) {  // a dash there would have been lost in a cross: the count stays unknown
+    *stop = true;
+    return true;
+  }
   const double reach_px = 0.5 * dash_length + 2.0 * o_.psf_fwhm_px + o_.flow_tolerance_px;
   bool empty = true;
   double faint_flux_dn = 0;  // pieces of a dash the deblender cut add up
@@ -285,7 +289,7 @@ bool LoneReader::CountRun() {
 // A run going on beyond the format (m of its dashes seen: a trail entering the format) has no count: the
 // number is the one of at least m dashes under which none of the star's other trails lies on the format where
 // nothing is (the trails before it lie further back on its arc, those after it further on) -- exactly one.
-int LoneReader::NumberEntering(const std::function<int(int)>& trail_of) const {
+int LoneReader::NumberEntering(const TagOf& tag_of) const {
   const std::vector<ShutterExposure>& ex = c_.per_trail[best_->trail];
   // The star's dash flux from its faintest dash (seed or separator): a blend only adds flux, and too much
   // would empty its other trails' places.
@@ -298,7 +302,7 @@ int LoneReader::NumberEntering(const std::function<int(int)>& trail_of) const {
     const int j = best_->exposure + FirstDot(c_.per_trail[u]) - first_dot_;  // the seed's exposure in trail u
     if (FirstDot(c_.per_trail[u]) < m_ || j < 0 || j >= static_cast<int>(c_.per_trail[u].size())) continue;
     const double seed_s = c_.per_trail[u][j].mid_s, star_flux_per_s = dash_flux_dn / a_dash_.duration_s;
-    if (SiblingAbsent(c_, all_, path_, p_, seed_s, u, star_flux_per_s, trail_of)) {
+    if (SiblingAbsent(c_, all_, path_, p_, seed_s, u, star_flux_per_s, tag_of)) {
       // Absence numbers the trail only where the reading shows no other trail of the star: one shown and one
       // absent says a trail is hidden (its dashes merged or lost), not that the reading is wrong.
       const FlowStar shown = CollectAlongFlow(c_, all_, path_, p_, seed_s, star_flux_per_s, every_trail_ & ~(1u << u), nullptr);
@@ -314,13 +318,13 @@ int LoneReader::NumberEntering(const std::function<int(int)>& trail_of) const {
 
 // The run's length must be a trail's (entering the format: NumberEntering), and the star's other trails must
 // not say another number; -1 otherwise.
-int LoneReader::Number(const std::function<int(int)>& trail_of) const {
+int LoneReader::Number(const TagOf& tag_of) const {
   int trail = -1;
   if (!off_format_) {
     for (size_t t = 0; t < c_.per_trail.size(); ++t)
       if (FirstDot(c_.per_trail[t]) == m_) trail = static_cast<int>(t);
   } else {
-    trail = NumberEntering(trail_of);
+    trail = NumberEntering(tag_of);
   }
   if (trail < 0) return -1;
   const auto own = best_->sibling_dots.find(trail);
@@ -356,7 +360,7 @@ bool LoneReader::Take(int trail, LoneTrail* out) const {
 }  // namespace
 
 bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int dash,
-                     const std::function<bool(int)>& excluded, const std::function<int(int)>& trail_of,
+                     const std::function<bool(int)>& excluded, const TagOf& tag_of,
                      LoneTrail* out) {
   const TrailOptions& o = c.o;
   const DetectedStar& d = c.images[dash];
@@ -372,7 +376,7 @@ bool DecodeLoneTrail(const Context& c, const Grid& all, const SkyFlow& flow, int
   const FlowPath path = PlatePath(c, flow, p);
   LoneReader reader(c, all, path, dash, v, excluded);
   if (!reader.GroupReadings() || !reader.CountRun()) return false;
-  const int trail = reader.Number(trail_of);
+  const int trail = reader.Number(tag_of);
   return trail >= 0 && reader.Take(trail, out);
 }
 

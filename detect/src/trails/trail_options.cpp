@@ -13,6 +13,7 @@ bool TrailOptions::Check(std::string* why) const {
   if (!(psf_fwhm_px > 0)) return fail("psf_fwhm_px must be > 0");
   if (!(max_dash_spacing_px > 0)) return fail("max_dash_spacing_px must be > 0");
   if (!(edge_margin_px >= 0)) return fail("edge_margin_px must be >= 0");
+  if (!blind.Check(nullptr)) return fail("blind: radius and arm widths must be >= 0, arm axes unit vectors");
   if (!(match_tolerance > 0 && match_tolerance < 0.5)) return fail("match_tolerance must be in (0, 0.5)");
   if (!(flux_tolerance >= 0)) return fail("flux_tolerance must be >= 0");
   if (!(position_floor_px >= 0)) return fail("position_floor_px must be >= 0");

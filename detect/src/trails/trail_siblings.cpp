@@ -7,6 +7,10 @@
 
 namespace platemeter::trail_internal {
 
+bool Blind(const TrailOptions& o, const PixelPoint& p, double length_px) {
+  return !o.blind.points_px.empty() && o.blind.Covers(p, 0.5 * length_px + o.psf_fwhm_px);
+}
+
 bool Inside(const TrailOptions& o, const PixelPoint& p, double margin_px) {
   if (o.image_max_px.x_px > o.image_min_px.x_px &&
       (p.x_px < o.image_min_px.x_px + margin_px || p.y_px < o.image_min_px.y_px + margin_px ||
@@ -37,6 +41,7 @@ bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, cons
   const double speed = std::hypot(velocity_px_per_s.x_px, velocity_px_per_s.y_px);
   if (!(speed > 0)) return false;
   const double dash_length_px = speed * duration_s;
+  if (Blind(o, q, dash_length_px)) return false;
   const double along_px = 0.5 * dash_length_px + 2.0 * o.psf_fwhm_px + tol_px, across_px = 1.5 * o.psf_fwhm_px + tol_px;
   DashHolder holder{dash_flux_dn, dash_length_px};
   holder.by_flux = by_flux;

@@ -40,6 +40,25 @@ enum StarFlag : unsigned {
 // "saturated,blended,..." (empty for none).
 std::string StarFlagNames(unsigned flags);
 
+// Known non-star marks the detector masks (reseau crosses). A component peaking within radius_px of a
+// point is a defect; with arms (arm_reach_px > 0) the points are crosses with arms along the two unit
+// vectors arm_axes_px (the grid's x and y axes in the scan), and only a peak within arm_reach_px of an arm
+// line is masked, while no star's fit takes pixels within arm_half_width_px of them: star images between
+// the arms are measured (whole V <= 8 Orbigon plate: +136 trail dots right). What the mask covers the
+// detector cannot see: the trail decoder holds no place there empty (TrailOptions::blind).
+struct StarMask {
+  std::vector<PixelPoint> points_px;
+  double radius_px = 10.0;                          // px
+  PixelPoint arm_axes_px[2] = {{1.0, 0.0}, {0.0, 1.0}};
+  double arm_reach_px = 0.0;                        // px; 0: the whole disk is masked
+  double arm_half_width_px = 0.0;                   // px; half the arm's line plus its blur
+  // Distance from p to the nearer arm line of the cross at m.
+  double ArmDistance_px(const PixelPoint& m, const PixelPoint& p) const;
+  // Whether an image at p reaching extent_px around it touches what the mask hides (a peak there is masked).
+  bool Covers(const PixelPoint& p, double extent_px) const;
+  bool Check(std::string* why) const;
+};
+
 struct StarDetectorOptions {
   bool dark = true;                       // stars darker than the background (negative plate)
   // px; a point image's FWHM to start from (matched filter, start of the fits). Not a limit: every image's
@@ -77,16 +96,7 @@ struct StarDetectorOptions {
   double max_dash_length_px = 0.0;        // px
   double dash_length_tolerance = 0.3;     // fraction of max_dash_length_px a segment may exceed it by
   double max_dash_width_ratio = 1.5;      // fitted segment PSF FWHM / psf_fwhm_px above this: defect
-  std::vector<PixelPoint> mask_px;        // known non-star marks (reseau crosses' positions)
-  double mask_radius_px = 10.0;           // px; components within this of a mask point are defects
-  // Crosses' arms (mask_arm_reach_px > 0): the marks of mask_px are crosses with arms along the two unit
-  // vectors mask_arm_axes_px (the grid's x and y axes in the scan). A component within mask_radius_px of a
-  // centre is then a defect only when its peak lies within mask_arm_reach_px of one of the arm lines, and
-  // no star's fit takes pixels within mask_arm_half_width_px of them: star images between the arms are
-  // measured (whole V <= 8 Orbigon plate: +136 trail dots right).
-  PixelPoint mask_arm_axes_px[2] = {{1.0, 0.0}, {0.0, 1.0}};
-  double mask_arm_reach_px = 0.0;         // px; 0: the whole disk is masked
-  double mask_arm_half_width_px = 0.0;    // px; half the arm's line plus its blur
+  StarMask mask;                          // known non-star marks (reseau crosses)
   bool Check(std::string* why) const;
 };
 

@@ -111,6 +111,9 @@ struct TrailOptions {
   // The exposed format's outline (a convex polygon, px; a plate is exposed only inside its format, often
   // smaller than the scan): the same checks as the scanned area. Empty: the scanned area alone.
   std::vector<PixelPoint> exposed_outline_px;
+  // Where the star detector was blind (its StarMask: the reseau crosses' arms): an image touching it was
+  // lost in the cross, so no place there is empty and no run is known to start beside it.
+  StarMask blind;
   // What the user decides.
   bool require_joined = false;         // true: a trail is tagged only when joined to another trail of its star
                                        // (which confirms its number); lone trails stay unassigned ("lone_trail")

@@ -161,15 +161,11 @@ std::optional<DetectedStar> ShapeDefect(const BandContext& k, const Component& c
   const bool line_like = long_side > k.line_box_px;
   bool sparse = long_side > 4.0 * o.psf_fwhm_px && c.area < 0.3 * c.width * c.height;
   if (sparse && k.dash_mode && MaskElongation(k.im.labels, c) > 3.0) sparse = false;  // a slanted dash, not a cross
-  bool masked = false;
   const StarMask& mask = o.mask;
-  for (const PixelPoint& m : mask.points_px) {
-    const double r = std::hypot(m.x_px - peak.x, m.y_px - peak_y_abs);
-    if (r < mask.radius_px &&
-        (mask.arm_reach_px <= 0 || mask.ArmDistance_px(m, {double(peak.x), double(peak_y_abs)}) <= mask.arm_reach_px))
-      masked = true;
-    if (mask.arm_reach_px > 0 && r < mask.radius_px + k.window_reach * std::sqrt(2.0)) near_crosses->push_back(m);
-  }
+  const bool masked = mask.Covers({double(peak.x), double(peak_y_abs)}, 0.0);
+  for (const PixelPoint& m : mask.points_px)
+    if (mask.arm_reach_px > 0 && std::hypot(m.x_px - peak.x, m.y_px - peak_y_abs) < mask.radius_px + k.window_reach * std::sqrt(2.0))
+      near_crosses->push_back(m);
   if (!line_like && !sparse && !masked) return std::nullopt;
   if (!line_like) return Defect(peak.x, peak_y_abs, sparse ? "cross" : "masked");
   // A line at the centre of its box, its extent the box's diagonal (what a trail linker asks it may hide).

@@ -87,6 +87,8 @@ class TrailDecoder {
   DashPlaces PlacesOfReading(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s,
                              int max_empty = std::numeric_limits<int>::max()) const;
   TagOf TagOfImages() const;  // each image's tag (trail number, mid-time), for the empty places
+  bool RivalLikelier(int dash, const DashPlaces& own, const std::vector<double>& rival_seeds_s,
+                     const std::vector<Taken>& taken, double flux_per_s) const;
   bool ReadingRefuted(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s);
   bool LoneNumberRefuted(int dash, const LoneTrail& lone, double seed_s, const std::vector<Taken>& taken);
   int FlowPlaceImage(const FlowPath& path, double dt_s, const PixelPoint& origin, const ShutterExposure& e,

@@ -212,18 +212,27 @@ DashPlaces TrailDecoder::PlacesOfReading(int dash, double seed_s, const std::vec
 bool TrailDecoder::ReadingRefuted(int dash, double seed_s, const std::vector<Taken>& taken, double flux_per_s) {
   if (!o_.ablation.flow_empty_places) return false;
   const DashPlaces own = PlacesOfReading(dash, seed_s, taken, flux_per_s);
-  const double own_log_odds = EmptyPlacesLogOdds(own);
-  bool refuted = own_log_odds > std::log(kRefuteOdds);
-  const int rival_max_empty = own.empty + own.dot_empty - 2;  // (a rival with more cannot be likelier)
+  bool refuted = EmptyPlacesLogOdds(own) > std::log(kRefuteOdds);
   // Compared with the seed read as each other dash of the program (Lisbon's KS13794, docs/trails_record.md:
-  // read one group off, 5 of 46 places empty, leaning right; read right, 0 of 53). Only readings with an
-  // empty place can be outdone.
-  for (int u = 0; u < trails_ && !refuted && own.empty + own.dot_empty >= 2; ++u)
-    for (const ShutterExposure& e : c_.per_trail[u])
-      if (!refuted && e.kind == ExposureKind::kDash && std::abs(e.mid_s - seed_s) >= kSameExposure_s)
-        refuted = OtherReadingLikelier(own, PlacesOfReading(dash, e.mid_s, taken, flux_per_s, rival_max_empty));
+  // read one group off, 5 of 46 places empty, leaning right; read right, 0 of 53).
+  std::vector<double> rival_seeds_s;
+  for (const std::vector<ShutterExposure>& trail : c_.per_trail)
+    for (const ShutterExposure& e : trail)
+      if (e.kind == ExposureKind::kDash && std::abs(e.mid_s - seed_s) >= kSameExposure_s) rival_seeds_s.push_back(e.mid_s);
+  refuted = refuted || RivalLikelier(dash, own, rival_seeds_s, taken, flux_per_s);
   result_.refused_readings += refuted;
   return refuted;
+}
+
+// Whether the seed read at one of rival_seeds_s is likelier than its reading `own` (OtherReadingLikelier). Only a
+// reading with two empty places or more can be outdone; a rival's count stops where it no longer can.
+bool TrailDecoder::RivalLikelier(int dash, const DashPlaces& own, const std::vector<double>& rival_seeds_s,
+                                 const std::vector<Taken>& taken, double flux_per_s) const {
+  const int own_empty = own.empty + own.dot_empty;
+  if (own_empty < 2) return false;
+  for (double rival_s : rival_seeds_s)
+    if (OtherReadingLikelier(own, PlacesOfReading(dash, rival_s, taken, flux_per_s, own_empty - 2))) return true;
+  return false;
 }
 
 // Whether a lone trail's reading (its number from its run counted back, the seed at seed_s) is refused for its
@@ -233,17 +242,17 @@ bool TrailDecoder::ReadingRefuted(int dash, double seed_s, const std::vector<Tak
 bool TrailDecoder::LoneNumberRefuted(int dash, const LoneTrail& lone, double seed_s, const std::vector<Taken>& taken) {
   if (!o_.ablation.flow_empty_places) return false;
   const DashPlaces own = PlacesOfReading(dash, seed_s, taken, lone.flux_per_s);
-  const double own_log_odds = EmptyPlacesLogOdds(own);
-  bool refuted = own_log_odds > std::log(kRefuteOdds);
+  bool refuted = EmptyPlacesLogOdds(own) > std::log(kRefuteOdds);
   int j_seed = -1;  // the seed's exposure in the trail, and where the runs' lengths put it under trail u
   for (const auto& [j, i] : lone.taken)
     if (i == dash) j_seed = j;
-  for (int u = 0; u < trails_ && !refuted && own.empty + own.dot_empty >= 2 && j_seed >= 0; ++u) {  // (else none is likelier)
+  std::vector<double> rival_seeds_s;
+  for (int u = 0; u < trails_ && j_seed >= 0; ++u) {
     const int ju = j_seed + program_.leading_dashes[u] - program_.leading_dashes[lone.trail];
-    if (u == lone.trail || ju < 0 || ju >= static_cast<int>(c_.per_trail[u].size())) continue;
-    refuted = OtherReadingLikelier(own, PlacesOfReading(dash, c_.per_trail[u][ju].mid_s, taken, lone.flux_per_s,
-                                                        own.empty + own.dot_empty - 2));
+    if (u != lone.trail && ju >= 0 && ju < static_cast<int>(c_.per_trail[u].size()))
+      rival_seeds_s.push_back(c_.per_trail[u][ju].mid_s);
   }
+  refuted = refuted || RivalLikelier(dash, own, rival_seeds_s, taken, lone.flux_per_s);
   result_.refused_readings += refuted;
   return refuted;
 }

@@ -8,7 +8,7 @@
 namespace platemeter::trail_internal {
 
 bool Blind(const TrailOptions& o, const PixelPoint& p, double length_px) {
-  return !o.blind.points_px.empty() && o.blind.Covers(p, 0.5 * length_px + o.psf_fwhm_px);
+  return o.blind.Covers(p, 0.5 * length_px + o.psf_fwhm_px);
 }
 
 bool Inside(const TrailOptions& o, const PixelPoint& p, double margin_px) {

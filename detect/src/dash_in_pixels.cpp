@@ -111,6 +111,23 @@ FluxFit FitFluxes(const std::vector<star_internal::FitPixel>& pixels,
 
 }  // namespace
 
+bool ClippedOnSweep(const ScanPixels& scan, const DashPlace& dash, const DetectedStar* own) {
+  PixelRect rect;
+  std::vector<star_internal::FitPixel> pixels;
+  std::vector<PixelPoint> clipped;
+  if (!detect_internal::WindowAbout(scan, dash.centre_px, 0.5 * dash.length_px + dash.fwhm_px, &rect) ||
+      !detect_internal::ReadContrast(scan, rect, &pixels, &clipped))
+    return false;
+  // (from `own` towards the place: the sweep's far half lies ahead of its centre)
+  const PixelPoint away = own ? PixelPoint{dash.centre_px.x_px - own->point.position_px.x_px,
+                                           dash.centre_px.y_px - own->point.position_px.y_px}
+                              : PixelPoint{0.0, 0.0};
+  return std::any_of(clipped.begin(), clipped.end(), [&](const PixelPoint& q) {
+    const double ahead = (q.x_px - dash.centre_px.x_px) * away.x_px + (q.y_px - dash.centre_px.y_px) * away.y_px;
+    return ahead >= 0.0 && detect_internal::ToSweep_px(q, dash.centre_px, dash.angle_rad, dash.length_px) <= dash.fwhm_px;
+  });
+}
+
 DashInPixels MeasureDashInPixels(const ScanPixels& scan, const DashPlace& dash, const std::vector<DetectedStar>& images,
                                  const DashInPixelsOptions& o) {
   DashInPixels out;

@@ -139,15 +139,36 @@ void TrailDecoder::ConfirmNumbers(NumberCheck* nc) {
       if (!nc->doubtful[k] && !nc->joined[k]) nc->doubtful[k] = true, result_.chains[k].reason = TrailReason::kLoneTrail;
 }
 
+namespace {
+
+// The scan's pixels at the place one dash before a run (where LinkTrails was given them): a dash's light
+// there (MeasureDashInPixels), or a saturated core on its sweep that is not the run's first dash's (a
+// saturated image the detector does not see into), may be the run's own first dash.
+bool BeforeRunSeenHeld(const Context& c, const Grid& all, const DashPlace& place, int run_first) {
+  if (!c.scan) return false;
+  return ClippedOnSweep(*c.scan, place, run_first >= 0 ? &c.images[run_first] : nullptr) ||
+         DashInPixelsAt(c, all, place).shown;
+}
+
+}  // namespace
+
 // An unconfirmed trail is kept only where nothing could have hidden a leading dash before its run (or posed
-// as one); else its reason says what left the number in doubt.
+// as one): no detection, and the pixels (where given) showing neither a dash nor a saturated image there;
+// else its reason says what left the number in doubt.
 bool TrailDecoder::ConfirmedAlone(int k) {
   const ChainState& cs = chain_[k];
   DashHolder holder{cs.dash_flux_dn, cs.dash_length_px};
   ForReaching(c_, *all_, cs.before_px, o_.tuning.clean_radius_spacings * cs.spacing_px, [&](int i) {
     if (result_.images[i].chain != k) holder.Add(images_[i]);
   });
-  const bool clean = !holder.Holds();
+  DashPlace before;
+  before.centre_px = cs.before_px;
+  before.angle_rad = cs.run_angle_rad;
+  before.length_px = cs.dash_length_px;
+  before.fwhm_px = o_.psf_fwhm_px;
+  before.flux_dn = cs.dash_flux_dn;
+  before.tolerance_px = o_.tuning.min_tolerance_px;
+  const bool clean = !holder.Holds() && !BeforeRunSeenHeld(c_, *all_, before, cs.run_first);
   // A slow star's 10 s gaps (a third of the spacing) within the PSF: its dashes merge, a lost one leaves no
   // trace in front of the run.
   const bool unresolved = cs.spacing_px / 3.0 < o_.psf_fwhm_px;

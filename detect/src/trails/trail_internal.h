@@ -11,6 +11,7 @@
 
 #include "platemeter/core/duty_cycle.h"
 #include "platemeter/core/pixel.h"
+#include "platemeter/detect/dash_in_pixels.h"
 #include "platemeter/detect/sky_flow.h"
 #include "platemeter/detect/star_detector.h"
 #include "platemeter/detect/trail_linker.h"
@@ -187,6 +188,10 @@ struct DashHolder {
 bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, const PixelPoint& velocity_px_per_s,
                     double dash_flux_dn, double duration_s, double tol_px, bool by_flux = false,
                     const std::function<bool(int)>& explained = {});
+
+// What the scan's pixels (c.scan: required) show at a dash's place: its thirds fitted with the light of the
+// detections about it (MeasureDashInPixels; trail_lone.cpp).
+DashInPixels DashInPixelsAt(const Context& c, const Grid& all, const DashPlace& place);
 
 // Whether image i, taken by another star with that star's flux, cannot have swallowed a dash of dash_flux_dn:
 // its flux would exceed its star's by the dash's, which the flux tolerance lets through only when

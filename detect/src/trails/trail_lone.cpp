@@ -16,6 +16,17 @@
 
 namespace platemeter::trail_internal {
 
+DashInPixels DashInPixelsAt(const Context& c, const Grid& all, const DashPlace& place) {
+  const DashInPixelsOptions options;
+  // (every detection whose light may reach the window: the longest a dash-long sweep)
+  const double reach_px = place.length_px + (options.window_fwhm + 3.0) * place.fwhm_px;
+  std::vector<DetectedStar> near;
+  all.Near(place.centre_px.x_px, place.centre_px.y_px, reach_px, [&](int i) {
+    if (c.usable[i]) near.push_back(c.images[i]);
+  });
+  return MeasureDashInPixels(*c.scan, place, near, options);
+}
+
 namespace {
 
 // Index of the trail's first dot (= its leading dash count).
@@ -60,12 +71,8 @@ int DurationsRequired(const Context& c, const FlowPath& path, int trail, double 
   return std::max(kMinDurationsCut, std::min(kDurations, DistinctCount(on_format_s)));
 }
 
-// What the scan's pixels show at the place of a dash of the star dt from the seed (where LinkTrails was
-// given them; nothing measured without them): its thirds fitted with the light of the detections about it
-// (MeasureDashInPixels).
-DashInPixels DashInScan(const Context& c, const Grid& all, const FlowPath& path, double dt, double dash_length_px,
-                        double dash_flux_dn) {
-  if (!c.scan) return {};
+// The place of a dash of the star dt from the seed, as the flow predicts it.
+DashPlace PlaceOnPath(const Context& c, const FlowPath& path, double dt, double dash_length_px, double dash_flux_dn) {
   const PixelPoint q = path.At(dt), v = path.VelocityAt(dt);
   DashPlace place;
   place.centre_px = q;
@@ -74,14 +81,16 @@ DashInPixels DashInScan(const Context& c, const Grid& all, const FlowPath& path,
   place.fwhm_px = c.o.psf_fwhm_px;
   place.flux_dn = dash_flux_dn;
   place.tolerance_px = FlowTolerance_px(c.o, q, path.At(0.0));  // (the path starts at the seed)
-  const DashInPixelsOptions options;
-  // (every detection whose light may reach the window: the longest a dash-long sweep)
-  const double reach_px = dash_length_px + (options.window_fwhm + 3.0) * place.fwhm_px;
-  std::vector<DetectedStar> near;
-  all.Near(q.x_px, q.y_px, reach_px, [&](int i) {
-    if (c.usable[i]) near.push_back(c.images[i]);
-  });
-  return MeasureDashInPixels(*c.scan, place, near, options);
+  return place;
+}
+
+// What the scan's pixels show at the place of a dash of the star dt from the seed (where LinkTrails was
+// given them; nothing measured without them): its thirds fitted with the light of the detections about it
+// (MeasureDashInPixels).
+DashInPixels DashInScan(const Context& c, const Grid& all, const FlowPath& path, double dt, double dash_length_px,
+                        double dash_flux_dn) {
+  if (!c.scan) return {};
+  return DashInPixelsAt(c, all, PlaceOnPath(c, path, dt, dash_length_px, dash_flux_dn));
 }
 
 // A dash read as a lone trail (DecodeLoneTrail): its readings grouped, the run counted back along the flow,
@@ -118,6 +127,7 @@ class LoneReader {
   void AddReading(int t, int j);
   Explained Explain(int from) const;
   bool PlaceEmpty(int m, bool* stop) const;
+  bool HoldsAnotherDash(int m, const Explained& before) const;
   int NumberEntering(const TagOf& tag_of) const;
 
   const Context& c_;
@@ -225,7 +235,8 @@ LoneReader::Explained LoneReader::Explain(int from) const {
 // with another image: at least its flux; the bigger piece of a split: half of it; or a rejected line reaching
 // there) lies within half its length and two FWHM of that. Empty, and the pixels (where given) show no dash
 // there either (merged into another star's image the flux rule let through, or no detection at all): the
-// run's end. Where the pixels show one: *stop (no decoding).
+// run's end. Where the pixels show one, or a saturated image the detector does not see into: *stop (no
+// decoding).
 bool LoneReader::PlaceEmpty(int m, bool* stop) const {
   const double dash_flux = a_dash_.duration_s * flux_per_s_, dash_length = a_dash_.duration_s * speed_px_per_s_;
   const PixelPoint q = path_.At(last_dash_s_ - 30.0 * m);
@@ -245,8 +256,34 @@ bool LoneReader::PlaceEmpty(int m, bool* stop) const {
     else faint_flux_dn += h.flux_dn;
   });
   if (!(empty && faint_flux_dn < 0.5 * dash_flux)) return false;
-  *stop = DashInScan(c_, all_, path_, last_dash_s_ - 30.0 * m, dash_length, dash_flux).shown;
+  // (a saturated core on the place: not the run's dash after it, counted last)
+  const double dt = last_dash_s_ - 30.0 * m;
+  const DetectedStar* after = run_.empty() ? nullptr : &c_.images[run_.back()];
+  *stop = DashInScan(c_, all_, path_, dt, dash_length, dash_flux).shown ||
+          (c_.scan && ClippedOnSweep(*c_.scan, PlaceOnPath(c_, path_, dt, dash_length, dash_flux), after));
   return true;
+}
+
+// Dash m's place held, the place before it a dash. Where the holder is a dash on the place (its length,
+// direction and position; not its flux) whose light beyond the run's dash is about the dash before's (half to
+// twice it), two stars' dashes are merged there -- stars on one diurnal path a whole number of dash spacings
+// apart -- and the dash before may be the other star's: the run may end at m as well as go on, and the count
+// is ambiguous (ARunHoldingAMergedDashMayBeTwoStarsRunsEndToEnd). A holder off the place or of another shape
+// is the run's own dash mismeasured beside another image, as before.
+bool LoneReader::HoldsAnotherDash(int m, const Explained& before) const {
+  const double dt = last_dash_s_ - 30.0 * m;
+  const PixelPoint q = path_.At(dt), vq = path_.VelocityAt(dt);
+  const double dash_dn = a_dash_.duration_s * flux_per_s_;
+  const double before_dash_dn = c_.images[before.image].flux_dn / before.k;
+  bool merged = false;
+  all_.Near(q.x_px, q.y_px, FlowTolerance_px(o_, q, p_), [&](int i) {
+    const DetectedStar& h = c_.images[i];
+    if (!c_.usable[i] || (excluded_ && excluded_(i)) || h.flux_dn <= 0 || (h.flags & kStarCrowded)) return;
+    if (!Compatible(c_, i, a_dash_, vq, 0.0)) return;
+    const double excess_dn = h.flux_dn - dash_dn;
+    merged |= excess_dn >= 0.5 * before_dash_dn && excess_dn <= 2.0 * before_dash_dn;
+  });
+  return merged;
 }
 
 // The run, counted back from its last dash along the flow: dash m (0 = the last) lies 30 m s before it, up to
@@ -282,6 +319,7 @@ bool LoneReader::CountRun() {
     if (seen.absent) return true;
     const Explained next = Explain(m_ + 1);
     if ((next.k <= 0 || next.off) && !seen.shown) return false;
+    if (next.k > 0 && !next.off && HoldsAnotherDash(m_, next)) return false;
     ++m_;  // dash m held by an image not its own measurement: not tagged
   }
 }

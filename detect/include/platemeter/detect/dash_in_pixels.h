@@ -62,4 +62,10 @@ struct DashInPixels {
 DashInPixels MeasureDashInPixels(const ScanPixels& scan, const DashPlace& dash, const std::vector<DetectedStar>& images,
                                  const DashInPixelsOptions& options = {});
 
+// Whether a clipped pixel (a saturated core) lies on the dash's sweep -- within a FWHM of it, in the sweep's
+// half away from `own` (the star's neighbouring dash, whose own saturated core may reach across the 10 s gap
+// into the near half; nullptr: the whole sweep): a saturated image there may hold the dash, and neither the
+// detector nor the thirds see into it. Outside the scan: false.
+bool ClippedOnSweep(const ScanPixels& scan, const DashPlace& dash, const DetectedStar* own);
+
 }  // namespace platemeter

@@ -42,7 +42,7 @@ class TrailDecoder {
     PixelPoint before_px;
     double spacing_px = 0, dash_flux_dn = 0, dash_length_px = 0;
     double run_angle_rad = 0;  // the run's direction (its dashes' sweep)
-    int run_first = -1;        // the image of the run's first dash
+    int first_dash_image = -1;  // the image of the run's first dash
     bool before_occupied = false;
     bool run_merged = false;  // a dash of the run holds another image's light: the count may join two stars' runs
     Taken grown;             // a run's images as grown (steps 1-2), before Settle

@@ -103,7 +103,7 @@ void TrailDecoder::DecodeRun(const std::vector<int>& run) {
   cs.before_px = before;
   cs.spacing_px = Dist(a, b);
   cs.run_angle_rad = std::atan2(a.y_px - b.y_px, a.x_px - b.x_px);
-  cs.run_first = r[0];
+  cs.first_dash_image = r[0];
   cs.dash_flux_dn = dash_flux, cs.dash_length_px = dash_length;
   cs.flux_per_s = flux_per_s;
   cs.grown = taken;

@@ -67,14 +67,20 @@ inline const std::vector<TrailPlate>& TrailPlateFamily() {
       {"houston-1974-03-early", "tune", 29.8, -95.4, "1974-03-16T03:00:00Z", 15, 87, 250, 20, 34, 8, 25, 60, 8.0,
        420, {4, 3, 2, 5}},
       // Held out from stop 49, when Lisbon and Houston became tuning plates; Munich a tuning plate since stop
-      // 50, when its wrong tags were looked into.
+      // 50, Delhi since stop 51, when their wrong tags were looked into.
       {"munich-1972-10-early", "tune", 48.1, 11.6, "1972-10-05T19:45:00Z", 300, 83, 20, 14, 30, 7, 30, 70, 7.0,
        480, {5, 2, 4, 3}},
-      {"delhi-1973-04-late", "report", 28.6, 77.2, "1973-04-14T22:20:00Z", 120, 86, 170, 18, 34, 8, 25, 55, 7.5,
+      {"delhi-1973-04-late", "tune", 28.6, 77.2, "1973-04-14T22:20:00Z", 120, 86, 170, 18, 34, 8, 25, 55, 7.5,
        540, {2, 5, 3, 4}},
-      // Held out from stop 50, when Munich became a tuning plate.
-      {"kyoto-1971-04-late", "report", 35.0, 135.8, "1971-04-20T17:30:00Z", 165, 81, 230, 17, 33, 8, 28, 65, 7.5,
+      // Held out from stop 50, when Munich became a tuning plate; a tuning plate since stop 51, when its wrong
+      // tags were looked into.
+      {"kyoto-1971-04-late", "tune", 35.0, 135.8, "1971-04-20T17:30:00Z", 165, 81, 230, 17, 33, 8, 28, 65, 7.5,
        450, {4, 2, 5, 3}},
+      // Held out from stop 51, when Kyoto and Delhi became tuning plates.
+      {"athens-1974-10-early", "report", 37.97, 23.72, "1974-10-08T18:30:00Z", 75, 84, 140, 13, 31, 7, 32, 75, 7.0,
+       600, {5, 3, 4, 2}},
+      {"madrid-1973-03-early", "report", 40.4, -3.7, "1973-03-10T20:45:00Z", 200, 88, 60, 15.5, 29, 7, 28, 70, 7.5,
+       570, {4, 3, 5, 2}},
   };
   return family;
 }

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "../detect/src/trails/trail_internal.h"
 #include "platemeter/calib/star_catalog.h"
 #include "platemeter/core/duty_cycle.h"
 #include "platemeter/detect/sky_flow.h"
@@ -44,8 +45,8 @@ struct Errors {
 };
 
 // The flow of the even-numbered stars (velocities from consecutive images at most 40 s apart: central
-// differences at the mean time) carrying the odd-numbered stars' first images.
-Errors FlowErrors(const std::map<std::string, std::vector<TruePoint>>& stars, int degree) {
+// differences at the mean time).
+SkyFlow FlowOfEvenStars(const std::map<std::string, std::vector<TruePoint>>& stars, int degree, size_t* samples) {
   std::vector<PixelPoint> p, v;
   int index = 0;
   for (const auto& [id, images] : stars) {
@@ -61,10 +62,18 @@ Errors FlowErrors(const std::map<std::string, std::vector<TruePoint>>& stars, in
   }
   SkyFlow flow;
   EXPECT_TRUE(flow.Fit(p, v, degree));
+  *samples = p.size();
+  return flow;
+}
+
+// The flow of the even-numbered stars carrying the odd-numbered stars' first images.
+Errors FlowErrors(const std::map<std::string, std::vector<TruePoint>>& stars, int degree) {
+  size_t samples = 0;
+  const SkyFlow flow = FlowOfEvenStars(stars, degree, &samples);
   Errors e;
   double sum2 = 0;
   long n = 0;
-  index = 0;
+  int index = 0;
   for (const auto& [id, images] : stars) {
     if (index++ % 2 == 0 || images.size() < 10) continue;
     const FlowPath path(flow, images.front().p, 8000.0), fine(flow, images.front().p, 8000.0, 10.0);
@@ -81,17 +90,22 @@ Errors FlowErrors(const std::map<std::string, std::vector<TruePoint>>& stars, in
   e.rms_px = std::sqrt(sum2 / std::max(1L, n));
   std::printf("[flow] degree %d: %zu samples (%d kept, residual %.1e px/s); %ld images carried up to %.0f px: error "
               "RMS %.4f px, max %.4f px; 30 s against 10 s steps: %.1e px\n",
-              degree, p.size(), flow.samples_used(), flow.residual_px_per_s(), n, e.max_distance_px, e.rms_px, e.max_px,
+              degree, samples, flow.samples_used(), flow.residual_px_per_s(), n, e.max_distance_px, e.rms_px, e.max_px,
               e.max_step_difference_px);
   return e;
+}
+
+// The true stars of a simulated Orbigon plate (V <= 5, 20 um), built once.
+const std::map<std::string, std::vector<TruePoint>>& PlateStars() {
+  static const auto stars = TrueStars(sim::BuildSimulatedPlate(
+      sim::ParseSimulationSpec(testing::OrbigonTrailSpec("flow", 5.0, 5.0, 6000.0, 20.0), "flow.toml"), DefinitionRegistry()));
+  return stars;
 }
 
 TEST(SkyFlow, CarriesAStarsImageToEveryOtherExposureOfThePlate) {
   if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
     GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
-  const sim::SimulatedPlate plate = sim::BuildSimulatedPlate(
-      sim::ParseSimulationSpec(testing::OrbigonTrailSpec("flow", 5.0, 5.0, 6000.0, 20.0), "flow.toml"), DefinitionRegistry());
-  const auto stars = TrueStars(plate);
+  const auto& stars = PlateStars();
   ASSERT_GT(stars.size(), 100u);
   // Degree 6 (the default): a tenth of the sibling tolerance of the old parabola (0.5 px + 0.002 x distance,
   // 6 px at 2800 px) across the whole plate.
@@ -103,6 +117,45 @@ TEST(SkyFlow, CarriesAStarsImageToEveryOtherExposureOfThePlate) {
   // Degree 4 does not follow the Orbigon's distortion near the format's corners.
   const Errors four = FlowErrors(stars, 4);
   EXPECT_GT(four.max_px, 2 * six.max_px);
+}
+
+// A trail's images on two flow paths are two stars' (trail_flow.cpp OnTwoFlowPaths; Kyoto's KS19121 T1 and
+// KS19130 T4: a run of the one and the other's dots 5 px beside it made one trail). The first 30 true images
+// of each odd-numbered star (a trail and a bit), carried by the even-numbered stars' flow: as they are, with
+// one or two stray images, and with the last 12 moved 5 px across the motion (another star's path).
+TEST(SkyFlow, ATrailsImagesOnTwoFlowPathsAreTwoStars) {
+  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
+    GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
+  size_t samples = 0;
+  const SkyFlow flow = FlowOfEvenStars(PlateStars(), 6, &samples);
+  const double fwhm_px = 2.24;  // (Kyoto's)
+  int trails = 0, one = 0, strays = 0, two = 0, index = 0;
+  for (const auto& [id, all] : PlateStars()) {
+    if (index++ % 2 == 0 || all.size() < 30) continue;
+    std::vector<std::pair<double, PixelPoint>> images;
+    for (size_t k = 0; k < 30; ++k) images.push_back({all[k].t_s, all[k].p});
+    const auto moved = [&](std::vector<std::pair<double, PixelPoint>> v, size_t from, size_t to) {
+      for (size_t k = from; k < to; ++k) {  // 5 px across the motion at image k
+        const PixelPoint& a = all[k == 0 ? 0 : k - 1].p;
+        const PixelPoint& b = all[k == 0 ? 1 : k].p;
+        const double step = std::hypot(b.x_px - a.x_px, b.y_px - a.y_px);
+        v[k].second.x_px -= 5.0 * (b.y_px - a.y_px) / step, v[k].second.y_px += 5.0 * (b.x_px - a.x_px) / step;
+      }
+      return v;
+    };
+    ++trails;
+    one += trail_internal::OnTwoFlowPaths(flow, images, fwhm_px);
+    strays += trail_internal::OnTwoFlowPaths(flow, moved(images, 0, 1), fwhm_px) +
+              trail_internal::OnTwoFlowPaths(flow, moved(images, 29, 30), fwhm_px) +
+              trail_internal::OnTwoFlowPaths(flow, moved(images, 10, 12), fwhm_px);
+    two += trail_internal::OnTwoFlowPaths(flow, moved(images, 18, 30), fwhm_px);
+  }
+  std::printf("[flow] %d trails: on two paths as they are %d, with strays %d, with their last 12 images 5 px across %d\n",
+              trails, one, strays, two);
+  ASSERT_GT(trails, 50);
+  EXPECT_EQ(one, 0);
+  EXPECT_EQ(strays, 0);
+  EXPECT_EQ(two, trails);
 }
 
 // What the flow decoder (detect/src/trails/trail_flow.cpp) relies on, from the schedule alone: a dash read as

@@ -105,9 +105,11 @@ ScanPixels BandPixels(const BandRun& b, const std::vector<float>& values) {
 }
 ScanPixels BandPixels(const BandRun& b) { return BandPixels(b, b.values); }
 
-BandRun RunBand(const std::string& spec, double pixel_um, long band_rows, double threshold_sigma) {
+BandRun RunBand(const std::string& spec, double pixel_um, long band_rows, double threshold_sigma,
+               const std::function<void(sim::Scene*)>& edit_scene = {}) {
   BandRun b;
   b.plate = sim::BuildSimulatedPlate(sim::ParseSimulationSpec(spec, "trails.toml"), DefinitionRegistry());
+  if (edit_scene) edit_scene(&b.plate.scene);
   // A band (the whole plate at 12.5 um would be 92 Mpx): pixels small enough that the leading
   // dashes (20 s open, 10 s closed) are resolved.
   std::vector<double> rows;
@@ -790,6 +792,69 @@ TEST(TrailLinker, ARunHoldingAMergedDashMayBeTwoStarsRunsEndToEnd) {
   // the stray before it, so the run may end there as well as go on; the trail is not numbered.
   EXPECT_EQ(wrong_lone, 0);
   EXPECT_GE(right_lone, right);
+}
+
+// Two stars on one diurnal path a fixed time apart merge at every exposure (Lisbon's KS11950 and KS12231,
+// 1.2 FWHM apart): each detection holds both, at their flux-weighted centre (neither star's position),
+// longer than the exposure's sweep by about their offset (docs/trails.md, "Settle"). The band rendered
+// again with a companion of like flux 1.2 FWHM along the path of every other star: a tag on an
+// image within a FWHM of a doubled star's image is on a blend (wrong). With the rule switched off the
+// blends decode as stars.
+TEST(TrailLinker, TwoStarsOnOnePathMergedAtEveryExposureAreNoStar) {
+  if (!std::filesystem::exists(calib::DefaultStarCatalogPath()))
+    GTEST_SKIP() << "kstars-data's stars.dat is missing (scripts/setup installs it)";
+  const double pixel_um = 12.5, fwhm_px = 30.0 / pixel_um;
+  std::set<std::string> doubled;
+  const auto add_companions = [&](sim::Scene* scene) {
+    std::vector<sim::SceneMark> companions;
+    for (const sim::SceneMark& m : scene->marks) {
+      if (m.kind != sim::MarkKind::kTrailDot && m.kind != sim::MarkKind::kTrailDash) continue;
+      const std::string star = m.id.substr(0, m.id.find("-T"));
+      if ((star.back() - '0') % 2 != 0) continue;  // (every other star, by its catalog number's last digit)
+      doubled.insert(star);
+      // The sweep's direction on the scan (the mark frame's segment through the local affine map).
+      const double dx = m.px_from_um[0] * m.segment_u_um + m.px_from_um[1] * m.segment_v_um;
+      const double dy = m.px_from_um[2] * m.segment_u_um + m.px_from_um[3] * m.segment_v_um;
+      const double len_px = std::hypot(dx, dy);
+      if (!(len_px > 0)) continue;
+      sim::SceneMark c = m;
+      c.id += "c";
+      c.centre_px.x_px += 1.2 * fwhm_px * dx / len_px, c.centre_px.y_px += 1.2 * fwhm_px * dy / len_px;
+      companions.push_back(c);
+    }
+    scene->marks.insert(scene->marks.end(), companions.begin(), companions.end());
+  };
+  const BandRun b = RunBand(SpecTrails(3.5, pixel_um), pixel_um, 1400, 4.0, add_companions);
+  ASSERT_GE(doubled.size(), 5u);
+  std::vector<bool> on_blend(b.found.size(), false);
+  for (size_t i = 0; i < b.found.size(); ++i)
+    for (const MeasuredPoint* t : b.truth)
+      if (doubled.count(t->star_id) &&
+          std::hypot(*t->x_px - b.found[i].point.position_px.x_px, *t->y_px - b.found[i].point.position_px.y_px) <
+              fwhm_px + 0.5 * b.found[i].length_px)
+        on_blend[i] = true;
+  const auto score = [&](bool rule, long* right) {
+    TrailOptions to = b.options;
+    to.ablation.two_stars = rule;
+    const ScanPixels scan = BandPixels(b);
+    const TrailLinkResult r = LinkTrails(b.found, DutyCycleScheduleOptions{}, to, &scan);
+    long blend_tags = 0;
+    *right = 0;
+    for (size_t i = 0; i < b.found.size(); ++i) {
+      if (!r.images[i].assigned) continue;
+      if (on_blend[i]) ++blend_tags;
+      else if (b.match[i] && TagsRight(r.images[i], *b.match[i])) ++*right;
+    }
+    return blend_tags;
+  };
+  long right_unaware = 0, right = 0;
+  const long blends_unaware = score(false, &right_unaware), blends = score(true, &right);
+  std::printf("[two stars] %zu stars given a companion 1.2 FWHM along their path: tags on blends %ld without the "
+              "rule (%ld other tags right), %ld with it (%ld right)\n",
+              doubled.size(), blends_unaware, right_unaware, blends, right);
+  EXPECT_GT(blends_unaware, 100);  // the blends decode as stars when their lengths are not asked
+  EXPECT_EQ(blends, 0);
+  EXPECT_GE(right, right_unaware - 10);  // the other stars as before
 }
 
 // The deblender may cut a dash crossed by other images into parts, each fainter than half a dash, and

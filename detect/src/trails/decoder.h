@@ -70,6 +70,7 @@ class TrailDecoder {
   void DecodeRun(const std::vector<int>& run);
   bool Settle(int cid, const Taken& taken, int min_images = 0);
   bool DropUnverifiable(int cid, Taken* kept, double median_residual_px, int min_images);
+  bool TwoStarsOnOnePath(int cid) const;
   void CheckNumbers();
   NumberCheck RetimeTracks() const;
   void FindJoins(NumberCheck* nc) const;
@@ -80,6 +81,7 @@ class TrailDecoder {
   void JoinSeparatorTrail(int cid, int number, const SiblingGrowth& grown);
   void FlowTrails();
   bool FitFlow();
+  void CheckTrailsOnFlow();
   void CheckJoinsOnFlow();
   void CheckSeparatorStars();
   void AddFlowStar(const FlowStar& star, double rate_px_per_s, int root);

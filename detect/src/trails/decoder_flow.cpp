@@ -15,6 +15,7 @@ namespace platemeter::trail_internal {
 
 void TrailDecoder::FlowTrails() {
   if (!FitFlow()) return;
+  CheckTrailsOnFlow();
   CheckJoinsOnFlow();
   CheckSeparatorStars();
   CompleteStars();
@@ -67,6 +68,22 @@ bool TrailDecoder::FitFlow() {
   for (int degree = o_.tuning.flow_degree; degree >= 2 && !flow_.ok(); --degree)
     if (sampled_trails >= (degree + 1) * (degree + 2) / 2) flow_.Fit(samples_p, samples_v, degree);
   return flow_.ok();
+}
+
+// A trail's own images lie on one flow path. Its track, a polynomial, may bend across a long gap from one
+// star's images onto another's on a path beside it (Kyoto's KS19121 T1 and KS19130 T4, 5 px apart with their
+// dots at one place: a run of the one and the other's dots 400 px on made one trail). Good images a FWHM off
+// (another star's path, resolved from this one) both ways make the trail two stars' (OnTwoFlowPaths): refused.
+void TrailDecoder::CheckTrailsOnFlow() {
+  for (int k = 0; k < static_cast<int>(result_.chains.size()); ++k) {
+    if (!Decoded(k) || result_.chains[k].decoded_by == TrailStep::kFlowFill) continue;
+    std::vector<std::pair<double, PixelPoint>> images;
+    for (const auto& [j, i] : chain_[k].kept)
+      if (!result_.images[i].bad) images.push_back({result_.images[i].mid_s, c_.p[i]});
+    if (!OnTwoFlowPaths(flow_, images, o_.psf_fwhm_px)) continue;
+    chain_[Root(k)].numbers &= ~(1u << (result_.chains[k].trail - 1));
+    Refuse(k, TrailReason::kOffFlow);
+  }
 }
 
 // A star's trails lie on one flow path: each trail's images carried along the flow from the end of the

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "../median.h"
 #include "decoder.h"
 #include "evidence.h"
 
@@ -59,7 +60,35 @@ bool TrailDecoder::Settle(int cid, const Taken& taken, int min_images) {
   Taken checked = kept;
   if (!DropUnverifiable(cid, &checked, median_residual_px, min_images)) return false;
   kept = checked;
+  if (o_.ablation.two_stars && TwoStarsOnOnePath(cid)) {
+    Refuse(cid, TrailReason::kBlended);
+    return false;
+  }
   return true;
+}
+
+// Whether trail cid's dots hold two stars' light: two stars on one diurnal path a fixed time apart merge at
+// every exposure, and one swept PSF fitted to the pair is longer than the exposure's sweep by about their
+// offset. Each dot's measured length (the detector's free-length fit) against the sweep its track predicts,
+// over dots whose sweep is a FWHM or longer (shorter ones are measured as points): the median excess in px
+// and in the dots' own sigmas (evidence.h, kTwoStar*).
+bool TrailDecoder::TwoStarsOnOnePath(int cid) const {
+  const TrailChain& tc = result_.chains[cid];
+  std::vector<double> excess_px, excess_sigmas;
+  for (const auto& [j, i] : chain_[cid].kept) {
+    const ShutterExposure& e = c_.per_trail[tc.trail - 1][j];
+    const DetectedStar& d = images_[i];
+    if (e.kind != ExposureKind::kDot || result_.images[i].bad || !(d.length_px > 0) || !(d.sigma_length_px > 0))
+      continue;
+    const PixelPoint v = chain_[cid].track.VelocityAt(e.mid_s);
+    const double sweep_px = e.duration_s * std::hypot(v.x_px, v.y_px);
+    if (sweep_px < kTwoStarMinSweepFwhm * o_.psf_fwhm_px) continue;
+    excess_px.push_back(d.length_px - sweep_px);
+    excess_sigmas.push_back((d.length_px - sweep_px) / d.sigma_length_px);
+  }
+  if (static_cast<int>(excess_px.size()) < kTwoStarDots) return false;
+  return detect_internal::Median(excess_px) > kTwoStarExcessFwhm * o_.psf_fwhm_px &&
+         detect_internal::Median(excess_sigmas) > kTwoStarExcessSigmas;
 }
 
 // A bad image, or one off the track by more than tight_tolerance_px, with other images around it is likely

@@ -111,6 +111,27 @@ inline double DominatedReach_px(double fwhm_px, double flux_ratio) {
   return (2.0 + 1.5 * std::min(3.0, std::log10(flux_ratio))) * fwhm_px;
 }
 
+// --- Two stars on one diurnal path (decoder_settle.cpp TwoStarsOnOnePath)
+// Two stars on one path a fixed time apart merge at every exposure; one swept PSF fitted to the pair is longer
+// than the sweep by about their offset (Lisbon's KS11950 and KS12231, 2.7 px = 1.2 FWHM apart: dots 1.4-2.4
+// px too long, 11-28 sigmas each). The median over a trail's dots (3 or more, of a FWHM's sweep or longer)
+// exceeds kTwoStarExcessFwhm FWHM and kTwoStarExcessSigmas of its own sigmas. Over every decoded trail (a
+// dump on 2026-12-08, two-star trails included) the median excess had p50 0.00 px and p99 0.46-0.55 px
+// (Beltsville, Paris, Lisbon, Cairo: 0.2-0.26 FWHM); saturated dots no wider (p99 0.35-0.42 px per dot). A
+// companion 1.2 FWHM along the path is caught (TrailLinker.TwoStarsOnOnePathMergedAtEveryExposureAreNoStar);
+// one 0.8 FWHM along mostly is not (its blend lies within 0.4 FWHM of either star; 0.4 FWHM would catch
+// under half of those).
+inline constexpr double kTwoStarExcessFwhm = 0.6;
+inline constexpr double kTwoStarExcessSigmas = 5.0;
+inline constexpr double kTwoStarMinSweepFwhm = 1.0;
+inline constexpr int kTwoStarDots = 3;
+
+// --- A trail on the flow (trail_flow.cpp OnTwoFlowPaths, decoder_flow.cpp CheckTrailsOnFlow)
+// Images of a trail a FWHM or more off the flow path through its first image, and as many off the path through
+// its last, that make it two stars' (the flow carries an image 3000 px to 0.02 px RMS; a right trail's images lie
+// on it to their measuring error, and one the track fit left a FWHM off is flagged bad and not counted).
+inline constexpr int kFlowStrayImages = 3;
+
 // --- Filling along the flow
 // Images a decoded star's missing trail filled along the flow must hold, of two exposure durations (a single
 // image at the flow's tolerance may be a chance coincidence over the thousands of places tried).

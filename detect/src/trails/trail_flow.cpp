@@ -153,6 +153,20 @@ FlowPath PlatePath(const Context& c, const SkyFlow& flow, const PixelPoint& p) {
   return FlowPath(flow, p, t_last_s - t_first_s, 30.0, [&](const PixelPoint& q) { return Inside(c.o, q, -50.0); });
 }
 
+bool OnTwoFlowPaths(const SkyFlow& flow, const std::vector<std::pair<double, PixelPoint>>& images, double off_px) {
+  if (images.size() < 2) return false;
+  const auto off_from = [&](const std::pair<double, PixelPoint>& origin) {
+    double span_s = 0;
+    for (const auto& [t_s, p] : images) span_s = std::max(span_s, std::abs(t_s - origin.first));
+    const FlowPath path(flow, origin.second, span_s + 30.0);
+    int off = 0;
+    for (const auto& [t_s, p] : images)
+      off += path.Covers(t_s - origin.first) && Dist(path.At(t_s - origin.first), p) > off_px;
+    return off;
+  };
+  return off_from(images.front()) >= kFlowStrayImages && off_from(images.back()) >= kFlowStrayImages;
+}
+
 FlowStar CollectAlongFlow(const Context& c, const Grid& all, const FlowPath& path, const PixelPoint& origin,
                           double t_origin_s, double flux_per_s, unsigned trail_mask,
                           const std::function<bool(int)>& excluded) {

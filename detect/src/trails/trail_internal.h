@@ -353,6 +353,11 @@ void AddFlowSamples(const Track& track, const std::vector<double>& t_s, std::vec
 // The path through p over the whole plate's time span (either way), ending 50 px outside the scan and format.
 FlowPath PlatePath(const Context& c, const SkyFlow& flow, const PixelPoint& p);
 
+// Whether a trail's images (mid time s, position; time order) lie on two flow paths: kFlowStrayImages or more
+// off_px or further from the path through its first image, and as many from the path through its last (one
+// stray image at either end moves only that end's path).
+bool OnTwoFlowPaths(const SkyFlow& flow, const std::vector<std::pair<double, PixelPoint>>& images, double off_px);
+
 // The images of one star found along its flow path, per trail (0-based): (exposure in the trail, image).
 struct FlowStar {
   std::vector<std::vector<std::pair<int, int>>> taken;

@@ -216,6 +216,8 @@ struct TrailOptions {
     bool flow_empty_places = true;     // a flow or lone reading refused when its dash places the plate shows empty
                                        // make it 100 times likelier wrong than right (docs/trails.md, "Empty
                                        // dash places")
+    bool two_stars = true;             // a trail whose dots are longer than their sweeps is two stars on one path
+                                       // (docs/trails.md, "Settle")
   } ablation;
   bool Check(std::string* why) const;  // every setting, tuning included
 };

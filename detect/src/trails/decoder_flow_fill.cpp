@@ -132,7 +132,8 @@ void TrailDecoder::FillMissingSiblings() {
     }
     std::vector<double> durations_s;  // (a chance image at each place would rarely fit two exposure lengths)
     for (const auto& [je, i] : found) durations_s.push_back(ex[je].duration_s);
-    if (static_cast<int>(found.size()) < kSiblingFillImages || DistinctCount(durations_s) < 2) return;
+    const int n = static_cast<int>(found.size());
+    if (n < kSiblingFillImages || (DistinctCount(durations_s) < 2 && n < kSiblingFillOneDuration)) return;
     const PixelPoint v = flow_.Velocity(origin);
     // (no track of its own: its images are the flow's) joined to the star
     const int cid = OpenChain(TrailStep::kFlowFill, s, chain_[k].flux_per_s, std::hypot(v.x_px, v.y_px));

@@ -136,5 +136,10 @@ inline constexpr int kFlowStrayImages = 3;
 // Images a decoded star's missing trail filled along the flow must hold, of two exposure durations (a single
 // image at the flow's tolerance may be a chance coincidence over the thousands of places tried).
 inline constexpr int kSiblingFillImages = 3;
+// Or this many of one duration: a trail cut by the format's edge may show one dot group only, and five images
+// each at its place to the flow's tolerance, of the dot's flux and length, are no chance (2026-12-08: Cairo +28
+// right dots, Houston +14, Beltsville +12, no wrong tag on the family; TrailCrowded.AStarsTrailShowingOneDot-
+// GroupIsFilledAlongTheFlow).
+inline constexpr int kSiblingFillOneDuration = 5;
 
 }  // namespace platemeter::trail_internal

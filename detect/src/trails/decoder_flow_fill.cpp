@@ -99,9 +99,10 @@ void TrailDecoder::FillTrailsAlongFlow() {
 
 // A decoded star's trails still missing (too few images for a track of their own, or refused by its fit among
 // other stars' images): each exposure's place carried along the flow from the end of the star's trail nearest
-// in time, filled as above. At least kSiblingFillImages of them, of two exposure lengths, make the trail. An
-// exposure whose neighbours' places lie within two tolerances of its own (a slow star) is skipped; a place
-// holding an image tagged with that trail number (the trail decoded as another star's) leaves the trail alone.
+// in time, filled as above. At least kSiblingFillImages of them, of two exposure lengths (or
+// kSiblingFillOneDuration of one), make the trail. An exposure whose neighbours' places lie within two
+// tolerances of its own (a slow star) is skipped; a place holding an image tagged with that trail number (the
+// trail decoded as another star's) leaves the trail alone.
 void TrailDecoder::FillMissingSiblings() {
   ForMissingTrails([&](int root, int s, int k, double t_end_s, const PixelPoint& origin) {
     const std::vector<ShutterExposure>& ex = c_.per_trail[s];

@@ -139,19 +139,6 @@ void TrailDecoder::ConfirmNumbers(NumberCheck* nc) {
       if (!nc->doubtful[k] && !nc->joined[k]) nc->doubtful[k] = true, result_.chains[k].reason = TrailReason::kLoneTrail;
 }
 
-namespace {
-
-// The scan's pixels at the place one dash before a run (where LinkTrails was given them): a dash's light
-// there (MeasureDashInPixels), or a saturated core on its sweep's half away from the run's first dash (a
-// saturated image the detector does not see into: ClippedOnSweep), may be the run's own first dash.
-bool BeforeRunSeenHeld(const Context& c, const Grid& all, const DashPlace& place, int first_dash_image) {
-  if (!c.scan) return false;
-  return ClippedOnSweep(*c.scan, place, first_dash_image >= 0 ? &c.images[first_dash_image] : nullptr) ||
-         DashInPixelsAt(c, all, place).shown;
-}
-
-}  // namespace
-
 // An unconfirmed trail is kept only where nothing could have hidden a leading dash before its run (or posed
 // as one): no detection, and the pixels (where given) showing neither a dash nor a saturated core there;
 // else its reason says what left the number in doubt.
@@ -168,7 +155,8 @@ bool TrailDecoder::ConfirmedAlone(int k) {
   before.fwhm_px = o_.psf_fwhm_px;
   before.flux_dn = cs.dash_flux_dn;
   before.tolerance_px = o_.tuning.min_tolerance_px;
-  const bool clean = !holder.Holds() && !BeforeRunSeenHeld(c_, *all_, before, cs.first_dash_image);
+  const DetectedStar* first_dash = cs.first_dash_image >= 0 ? &images_[cs.first_dash_image] : nullptr;
+  const bool clean = !holder.Holds() && !PixelsMayHoldDash(c_, *all_, before, first_dash);
   // A slow star's 10 s gaps (a third of the spacing) within the PSF: its dashes merge, a lost one leaves no
   // trace in front of the run.
   const bool unresolved = cs.spacing_px / 3.0 < o_.psf_fwhm_px;

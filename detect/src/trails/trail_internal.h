@@ -192,6 +192,10 @@ bool DashPlaceEmpty(const Context& c, const Grid& all, const PixelPoint& q, cons
 // What the scan's pixels (c.scan: required) show at a dash's place: its thirds fitted with the light of the
 // detections about it (MeasureDashInPixels; trail_lone.cpp).
 DashInPixels DashInPixelsAt(const Context& c, const Grid& all, const DashPlace& place);
+// Whether the scan's pixels (where LinkTrails was given them; false without) may hold a dash at its place: its
+// light in the thirds (DashInPixelsAt), or a saturated core on its sweep's half away from `own`, the star's
+// neighbouring dash (ClippedOnSweep: the detector does not see into a saturated image).
+bool PixelsMayHoldDash(const Context& c, const Grid& all, const DashPlace& place, const DetectedStar* own);
 
 // Whether image i, taken by another star with that star's flux, cannot have swallowed a dash of dash_flux_dn:
 // its flux would exceed its star's by the dash's, which the flux tolerance lets through only when

@@ -27,6 +27,11 @@ DashInPixels DashInPixelsAt(const Context& c, const Grid& all, const DashPlace& 
   return MeasureDashInPixels(*c.scan, place, near, options);
 }
 
+bool PixelsMayHoldDash(const Context& c, const Grid& all, const DashPlace& place, const DetectedStar* own) {
+  if (!c.scan) return false;
+  return DashInPixelsAt(c, all, place).shown || ClippedOnSweep(*c.scan, place, own);
+}
+
 namespace {
 
 // Index of the trail's first dot (= its leading dash count).
@@ -257,10 +262,8 @@ bool LoneReader::PlaceEmpty(int m, bool* stop) const {
   });
   if (!(empty && faint_flux_dn < 0.5 * dash_flux)) return false;
   // (a saturated core on the place: not the run's dash after it, counted last)
-  const double dt = last_dash_s_ - 30.0 * m;
   const DetectedStar* after = run_.empty() ? nullptr : &c_.images[run_.back()];
-  *stop = DashInScan(c_, all_, path_, dt, dash_length, dash_flux).shown ||
-          (c_.scan && ClippedOnSweep(*c_.scan, PlaceOnPath(c_, path_, dt, dash_length, dash_flux), after));
+  *stop = PixelsMayHoldDash(c_, all_, PlaceOnPath(c_, path_, last_dash_s_ - 30.0 * m, dash_length, dash_flux), after);
   return true;
 }
 
